@@ -1,0 +1,184 @@
+//! The material file of SPEC §3 (`*.brdf.json`): parsing with every refusal naming the field and the
+//! reason, validation (ranges, unit quaternions, the energy bound), and serialisation.
+//!
+//! Unknown fields are refused. A missing `normalization` means `"ward"` (the paper's eq. 1); missing
+//! `symmetrize`, `tangent_angle`, `rotation` and `split` mean `false`, 0, identity and `false`.
+
+use std::path::Path;
+
+use glam::DQuat;
+use serde::{Deserialize, Serialize};
+
+use super::material::{Lobe, Material, ALPHA_MAX, ALPHA_MIN};
+use super::ward::Normalization;
+use crate::error::{Error, Result};
+
+pub const MATERIAL_FORMAT: &str = "brdf-shop/material";
+pub const MATERIAL_VERSION: u32 = 1;
+
+fn identity() -> [f64; 4] {
+    [1.0, 0.0, 0.0, 0.0]
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LobeFile {
+    albedo: [f64; 3],
+    alpha_x: f64,
+    alpha_y: f64,
+    #[serde(default)]
+    tangent_angle: f64,
+    #[serde(default = "identity")]
+    rotation: [f64; 4],
+    #[serde(default)]
+    split: bool,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialFile {
+    format: String,
+    version: u32,
+    diffuse: [f64; 3],
+    #[serde(default)]
+    normalization: Normalization,
+    #[serde(default)]
+    symmetrize: bool,
+    lobes: Vec<LobeFile>,
+}
+
+/// Parses JSON into `T`, naming the path of the field that failed (`lobes[0].alpha_x: …`).
+pub(crate) fn parse_json<'de, T: Deserialize<'de>>(text: &'de str, origin: &str) -> Result<T> {
+    if text.trim().is_empty() {
+        return Err(Error::input(origin, "the file is empty"));
+    }
+    let de = &mut serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        if path == "." || path.is_empty() {
+            Error::input(origin, inner.to_string())
+        } else {
+            Error::input(origin, format!("{path}: {inner}"))
+        }
+    })
+}
+
+pub(crate) fn check_format(origin: &str, format: &str, want: &str, version: u32) -> Result<()> {
+    if format != want {
+        return Err(Error::input(origin, format!("format: expected \"{want}\", got \"{format}\"")));
+    }
+    if version != 1 {
+        return Err(Error::input(
+            origin,
+            format!("version: unsupported version {version} (this program reads version 1)"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_albedo(origin: &str, field: &str, c: [f64; 3]) -> Result<()> {
+    for (i, v) in c.iter().enumerate() {
+        if !(v.is_finite() && *v >= 0.0) {
+            return Err(Error::input(origin, format!("{field}[{i}]: must be a finite number ≥ 0, got {v}")));
+        }
+    }
+    Ok(())
+}
+
+const CHANNELS: [&str; 3] = ["red", "green", "blue"];
+
+impl Material {
+    /// Checks ranges and the energy bound; `origin` names the file in the message.
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        check_albedo(origin, "diffuse", self.diffuse)?;
+        for (k, l) in self.lobes.iter().enumerate() {
+            check_albedo(origin, &format!("lobes[{k}].albedo"), l.albedo)?;
+            for (name, a) in [("alpha_x", l.alpha_x), ("alpha_y", l.alpha_y)] {
+                if !(a.is_finite() && (ALPHA_MIN..=ALPHA_MAX).contains(&a)) {
+                    return Err(Error::input(
+                        origin,
+                        format!("lobes[{k}].{name}: must be in [{ALPHA_MIN}, {ALPHA_MAX}], got {a}"),
+                    ));
+                }
+            }
+            if !l.tangent_angle.is_finite() {
+                return Err(Error::input(origin, format!("lobes[{k}].tangent_angle: must be finite")));
+            }
+        }
+        if let Some((c, sum)) = self.energy_violation() {
+            return Err(Error::input(
+                origin,
+                format!("energy bound broken in the {} channel: diffuse + Σ lobe albedos = {sum} > 1", CHANNELS[c]),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Parses and validates a material file's text.
+    pub fn from_json(text: &str, origin: &str) -> Result<Material> {
+        let f: MaterialFile = parse_json(text, origin)?;
+        check_format(origin, &f.format, MATERIAL_FORMAT, f.version)?;
+        let mut lobes = Vec::with_capacity(f.lobes.len());
+        for (k, l) in f.lobes.into_iter().enumerate() {
+            let [w, x, y, z] = l.rotation;
+            let q = DQuat::from_xyzw(x, y, z, w);
+            let len = q.length();
+            if !(len.is_finite() && len > 1e-12) {
+                return Err(Error::input(
+                    origin,
+                    format!("lobes[{k}].rotation: a quaternion of length {len} cannot be normalised"),
+                ));
+            }
+            lobes.push(Lobe {
+                albedo: l.albedo,
+                alpha_x: l.alpha_x,
+                alpha_y: l.alpha_y,
+                tangent_angle: l.tangent_angle,
+                rotation: q / len,
+                split: l.split,
+            });
+        }
+        let m = Material { diffuse: f.diffuse, normalization: f.normalization, symmetrize: f.symmetrize, lobes };
+        m.validate(origin)?;
+        Ok(m)
+    }
+
+    /// Reads and validates a material file.
+    pub fn load(path: &Path) -> Result<Material> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Material::from_json(&text, &path.display().to_string())
+    }
+
+    /// The file's JSON text (pretty, full `f64` precision: it reads back bit for bit).
+    pub fn to_json(&self) -> String {
+        let f = MaterialFile {
+            format: MATERIAL_FORMAT.into(),
+            version: MATERIAL_VERSION,
+            diffuse: self.diffuse,
+            normalization: self.normalization,
+            symmetrize: self.symmetrize,
+            lobes: self
+                .lobes
+                .iter()
+                .map(|l| LobeFile {
+                    albedo: l.albedo,
+                    alpha_x: l.alpha_x,
+                    alpha_y: l.alpha_y,
+                    tangent_angle: l.tangent_angle,
+                    rotation: [l.rotation.w, l.rotation.x, l.rotation.y, l.rotation.z],
+                    split: l.split,
+                })
+                .collect(),
+        };
+        let mut s = serde_json::to_string_pretty(&f).expect("a material always serialises");
+        s.push('\n');
+        s
+    }
+
+    /// Validates, then writes atomically (temp file + rename): a failure leaves `path` untouched.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        self.validate(&path.display().to_string())?;
+        crate::fsio::write_atomic(path, self.to_json().as_bytes())
+    }
+}

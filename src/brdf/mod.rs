@@ -1,0 +1,14 @@
+//! The BRDF model of SPEC §2: the extended multi-lobe Ward material of the paper (eq. 1–2), its
+//! sampling, its energy and reciprocity measurements, and the material file of SPEC §3.
+//!
+//! Plain Rust: nothing here may import `ash` or anything of the renderer; the renderer and the editor
+//! depend on this module, never the reverse.
+
+pub mod energy;
+pub mod file;
+pub mod material;
+pub mod sampling;
+pub mod ward;
+
+pub use material::{Lobe, Material, MaterialF32, ALPHA_MAX, ALPHA_MIN};
+pub use ward::Normalization;

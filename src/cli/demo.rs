@@ -1,0 +1,48 @@
+//! The headless main job (until the editor lands): paints the embedded default strokes onto the
+//! scratch material and writes `material.brdf.json`, `canvas.png` (the CPU canvas, 512²) and
+//! `check.txt` (the energy report) into a folder.
+
+use std::path::Path;
+
+use anyhow::Context;
+use brdf_shop::brdf::energy::Report;
+use brdf_shop::brdf::Material;
+use brdf_shop::brush::Strokes;
+use image::ImageEncoder;
+
+pub const DEFAULT_STROKES: &str = include_str!("../../assets/default.strokes.json");
+
+/// Linear radiance → 8-bit sRGB (SPEC §1 PNG output: exposure, transfer curve, clamp).
+pub fn srgb8(v: f64, exposure: f64) -> u8 {
+    let x = (v * exposure).clamp(0.0, 1.0);
+    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+pub fn run(out: &Path) -> anyhow::Result<()> {
+    let strokes = Strokes::from_json(DEFAULT_STROKES, "embedded default strokes")?;
+    let m = strokes.replay(&Material::scratch(), "embedded default strokes")?;
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the folder", out.display()))?;
+    m.save(&out.join("material.brdf.json"))?;
+
+    let settings = strokes.settings("embedded default strokes")?;
+    const SIZE: usize = 512;
+    let img = settings.canvas.image(&m, SIZE);
+    let mut rgb = Vec::with_capacity(SIZE * SIZE * 3);
+    for p in &img {
+        rgb.extend(p.map(|v| srgb8(v, 0.5)));
+    }
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, SIZE as u32, SIZE as u32, image::ExtendedColorType::Rgb8)
+        .context("encoding canvas.png")?;
+    brdf_shop::fsio::write_atomic(&out.join("canvas.png"), &png)?;
+
+    let (samples, pairs) = (20_000, 200_000);
+    let report = Report::measure(&m, samples, pairs);
+    let text = super::check::report_text(&m, &report, samples, pairs);
+    brdf_shop::fsio::write_atomic(&out.join("check.txt"), text.as_bytes())?;
+    print!("{text}");
+    println!("wrote {0}/material.brdf.json, {0}/canvas.png, {0}/check.txt", out.display());
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! Command-line front end (SPEC §4). Each subcommand lives in its own file; this one parses flags and
+//! dispatches. Library errors carry the file and field; `anyhow` adds context only here.
+
+mod check;
+mod demo;
+mod eval;
+mod paint;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// A mistake in how the program was called (exit status 1).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+#[derive(Parser)]
+#[command(
+    name = "brdf-shop",
+    version,
+    about = "Paint highlights on a spherical canvas; get a physically plausible multi-lobe Ward BRDF"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Evaluate f(ω_i, ω_o): reads lines `wix wiy wiz wox woy woz` on stdin, writes `r g b` per line.
+    Eval {
+        #[arg(long)]
+        material: PathBuf,
+    },
+    /// Replay a strokes file onto a material (or onto the scratch material) and write the result.
+    Paint {
+        #[arg(long)]
+        strokes: PathBuf,
+        #[arg(long)]
+        material: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Energy bound, maximum directional albedo and reciprocity error of a material.
+    Check {
+        #[arg(long)]
+        material: PathBuf,
+        /// Monte Carlo samples per view direction for the albedo.
+        #[arg(long, default_value_t = 20_000)]
+        samples: usize,
+        /// Direction pairs for the reciprocity error.
+        #[arg(long, default_value_t = 200_000)]
+        pairs: usize,
+        /// Print the report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The headless main job: paint the embedded default strokes onto the scratch material, write the
+    /// material, a canvas image and the energy report into a folder.
+    Demo {
+        #[arg(long, default_value = "brdf-shop-demo")]
+        out: PathBuf,
+    },
+}
+
+/// Parses the command line; help and version print and succeed, bad flags give one line and exit 1.
+pub fn parse() -> Result<Cli, ExitCode> {
+    Cli::try_parse().map_err(|e| {
+        use clap::error::ErrorKind;
+        match e.kind() {
+            ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                let _ = e.print();
+                ExitCode::SUCCESS
+            }
+            _ => {
+                let text = e.to_string();
+                let first = text.lines().next().unwrap_or("bad command line").trim_start_matches("error: ");
+                eprintln!("brdf-shop: {first} (see brdf-shop --help)");
+                ExitCode::from(1)
+            }
+        }
+    })
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        None => demo::run(&PathBuf::from("brdf-shop-demo")),
+        Some(Command::Demo { out }) => demo::run(&out),
+        Some(Command::Eval { material }) => eval::run(&material),
+        Some(Command::Paint { strokes, material, out }) => paint::run(&strokes, material.as_deref(), &out),
+        Some(Command::Check { material, samples, pairs, json }) => check::run(&material, samples, pairs, json),
+    }
+}

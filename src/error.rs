@@ -1,0 +1,43 @@
+//! The library's one error type. The binary turns it into one line on stderr and an exit status
+//! (1 for [`Error::is_user_error`], 2 otherwise).
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad input: `origin` names the file (or `stdin`), `message` the field or line and what is wrong.
+    #[error("{origin}: {message}")]
+    Input { origin: String, message: String },
+    /// A brush stroke that cannot be applied where it was made.
+    #[error("{0}")]
+    Brush(String),
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    pub fn input(origin: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Input { origin: origin.into(), message: message.into() }
+    }
+
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+
+    /// Whether the user can fix this by changing their input (exit status 1).
+    pub fn is_user_error(&self) -> bool {
+        match self {
+            Error::Input { .. } | Error::Brush(_) => true,
+            Error::Io { source, .. } => matches!(
+                source.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::InvalidData
+            ),
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
