@@ -1,4 +1,4 @@
-//! Atomic file writes: the bytes go to a temporary file beside the target, are flushed to disk, and
+//! Text and file output. `shortest` prints an `f64` so it reads back bit for bit. Atomic file writes: the bytes go to a temporary file beside the target, are flushed to disk, and
 //! the temporary file is renamed over the target. A failure at any step leaves the target as it was.
 
 use std::io::Write;
@@ -24,4 +24,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         return Err(Error::io(path, e));
     }
     Ok(())
+}
+
+/// The shortest text that reads back to the same `f64`: plain notation for `1e-5 ≤ |v| < 1e16` (and 0),
+/// scientific otherwise. What `brdf-shop eval` prints.
+pub fn shortest(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || (1e-5..1e16).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }

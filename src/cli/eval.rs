@@ -8,16 +8,6 @@ use brdf_shop::brdf::Material;
 use brdf_shop::Error;
 use glam::DVec3;
 
-/// Shortest text that reads back to the same `f64`, in plain notation where that is short.
-pub fn fmt_f64(v: f64) -> String {
-    let a = v.abs();
-    if v == 0.0 || (1e-5..1e16).contains(&a) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
-
 fn parse_line(line: &str, no: usize) -> Result<(DVec3, DVec3), Error> {
     let origin = "stdin";
     let nums: Vec<&str> = line.split_whitespace().collect();
@@ -60,7 +50,7 @@ pub fn run(material: &Path) -> anyhow::Result<()> {
     let mut out = String::new();
     for (wi, wo) in pairs {
         let f = m.eval(wi, wo);
-        out.push_str(&format!("{} {} {}\n", fmt_f64(f[0]), fmt_f64(f[1]), fmt_f64(f[2])));
+        out.push_str(&format!("{} {} {}\n", brdf_shop::fsio::shortest(f[0]), brdf_shop::fsio::shortest(f[1]), brdf_shop::fsio::shortest(f[2])));
     }
     std::io::stdout().write_all(out.as_bytes())?;
     Ok(())
