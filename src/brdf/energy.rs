@@ -96,16 +96,31 @@ fn uniform_hemisphere(u1: f64, u2: f64) -> DVec3 {
     DVec3::new(r * c, r * s, z)
 }
 
-/// `max |f(a,b) − f(b,a)| / max f` over `n` pairs (the maximum over channels): half uniform on the
-/// hemisphere, half with `a` importance-sampled about `b` so that sharp lobes are hit.
-pub fn reciprocity_error(m: &Material, n: usize, seed: u64) -> f64 {
+/// How far a material is from reciprocal, over random direction pairs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reciprocity {
+    /// `max |f(a,b) − f(b,a)| / max f` (the maximum over channels). Dominated by grazing pairs: a
+    /// rotated lobe is cut off where `R ω_o` crosses the horizon, so any rotation off the normal makes
+    /// this close to 1 somewhere near grazing.
+    pub max_rel: f64,
+    /// `Σ |f(a,b) − f(b,a)| cos θ_a cos θ_b / Σ ½(f(a,b) + f(b,a)) cos θ_a cos θ_b` over the uniform
+    /// pairs: the non-reciprocal share of the reflected energy.
+    pub mean_rel: f64,
+}
+
+/// [`Reciprocity`] over `n` pairs (the maximum over channels): half uniform on the hemisphere, half
+/// with `a` importance-sampled about `b` so that sharp lobes are hit.
+pub fn reciprocity(m: &Material, n: usize, seed: u64) -> Reciprocity {
     let mut rng = Pcg32::new(seed, 0xec1);
     let mut max_diff = [0.0f64; 3];
     let mut max_f = [0.0f64; 3];
+    let mut sum_diff = [0.0f64; 3];
+    let mut sum_f = [0.0f64; 3];
     for i in 0..n {
         let b = uniform_hemisphere(rng.next_f64(), rng.next_f64());
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
-        let a = if i % 2 == 0 {
+        let uniform = i % 2 == 0;
+        let a = if uniform {
             uniform_hemisphere(u1, u2)
         } else {
             match MaterialSampler::new(m, b).sample(u0, 1.0 - u1, u2) {
@@ -115,11 +130,25 @@ pub fn reciprocity_error(m: &Material, n: usize, seed: u64) -> f64 {
         };
         let (fab, fba) = (m.eval(a, b), m.eval(b, a));
         for c in 0..3 {
-            max_diff[c] = max_diff[c].max((fab[c] - fba[c]).abs());
+            let d = (fab[c] - fba[c]).abs();
+            max_diff[c] = max_diff[c].max(d);
             max_f[c] = max_f[c].max(fab[c]).max(fba[c]);
+            if uniform {
+                let w = a.z * b.z;
+                sum_diff[c] += d * w;
+                sum_f[c] += 0.5 * (fab[c] + fba[c]) * w;
+            }
         }
     }
-    (0..3).map(|c| if max_f[c] > 0.0 { max_diff[c] / max_f[c] } else { 0.0 }).fold(0.0, f64::max)
+    let ratio = |num: [f64; 3], den: [f64; 3]| {
+        (0..3).map(|c| if den[c] > 0.0 { num[c] / den[c] } else { 0.0 }).fold(0.0, f64::max)
+    };
+    Reciprocity { max_rel: ratio(max_diff, max_f), mean_rel: ratio(sum_diff, sum_f) }
+}
+
+/// `max |f(a,b) − f(b,a)| / max f` over `n` pairs; see [`reciprocity`].
+pub fn reciprocity_error(m: &Material, n: usize, seed: u64) -> f64 {
+    reciprocity(m, n, seed).max_rel
 }
 
 /// Everything `brdf-shop check` and the editor's energy readout show.
@@ -128,7 +157,7 @@ pub struct Report {
     /// `ρ_d + Σρ_k` per channel.
     pub sums: [f64; 3],
     pub max_albedo: MaxAlbedo,
-    pub reciprocity: f64,
+    pub reciprocity: Reciprocity,
 }
 
 impl Report {
@@ -136,7 +165,7 @@ impl Report {
         Report {
             sums: m.energy_sums(),
             max_albedo: max_directional_albedo(m, samples),
-            reciprocity: reciprocity_error(m, pairs, 1),
+            reciprocity: reciprocity(m, pairs, 1),
         }
     }
 

@@ -57,8 +57,8 @@ impl Lobe {
     pub fn eval(&self, norm: Normalization, wi: DVec3, wo: DVec3) -> f64 {
         let shape = self.shape();
         let (views, n) = self.rotated_views(wo);
-        let sum: f64 = views[..n].iter().map(|&b| ward::f64::lobe(norm, &shape, wi, b)).sum();
-        sum / n as f64
+        let w = 1.0 / n as f64;
+        views[..n].iter().map(|&b| w * ward::f64::lobe(norm, &shape, wi, b)).sum()
     }
 
     pub fn is_rotated(&self) -> bool {
@@ -176,11 +176,14 @@ impl Material {
             return [0.0; 3];
         };
         let f = self.eval_one_way(wi, wo);
-        if !self.symmetrize {
-            return f;
-        }
-        let g = self.eval_one_way(wo, wi);
-        [0, 1, 2].map(|c| 0.5 * (f[c] + g[c]))
+        let f = if self.symmetrize {
+            let g = self.eval_one_way(wo, wi);
+            [0, 1, 2].map(|c| 0.5 * f[c] + 0.5 * g[c])
+        } else {
+            f
+        };
+        // Sums of saturated lobes stay at the largest finite value.
+        f.map(|v| v.min(f64::MAX))
     }
 
     /// The same material prepared for `f32` evaluation.
@@ -235,7 +238,7 @@ impl MaterialF32 {
             let mut v = ward::f32::lobe(self.normalization, &l.shape, wi, l.rotation * wo);
             if l.split {
                 let w = ward::f32::lobe(self.normalization, &l.shape, wi, l.rotation.conjugate() * wo);
-                v = 0.5 * (v + w);
+                v = 0.5 * v + 0.5 * w;
             }
             for (c, a) in f.iter_mut().zip(l.albedo) {
                 *c += a * v;
@@ -257,10 +260,12 @@ impl MaterialF32 {
             return [0.0; 3];
         };
         let f = self.eval_one_way(wi, wo);
-        if !self.symmetrize {
-            return f;
-        }
-        let g = self.eval_one_way(wo, wi);
-        [0, 1, 2].map(|c| 0.5 * (f[c] + g[c]))
+        let f = if self.symmetrize {
+            let g = self.eval_one_way(wo, wi);
+            [0, 1, 2].map(|c| 0.5 * f[c] + 0.5 * g[c])
+        } else {
+            f
+        };
+        f.map(|v| v.min(f32::MAX))
     }
 }

@@ -126,10 +126,12 @@ impl<'a> MaterialSampler<'a> {
                 }
             }
         }
-        // Diffuse keeps a floor so that every direction the material reflects into has a positive pdf.
-        let total_spec: f64 = components.iter().map(|c| c.1).sum();
-        let wd = mean(material.diffuse).max(0.05 * total_spec).max(1e-3);
-        components.push((Component::Diffuse, wd));
+        // Each lobe component's pdf is positive wherever its term is, so the diffuse component is only
+        // needed for the diffuse term (or as the sampler of last resort for an all-black material).
+        let wd = mean(material.diffuse);
+        if wd > 0.0 || components.iter().all(|c| c.1 <= 0.0) {
+            components.push((Component::Diffuse, wd.max(1e-3)));
+        }
         let total: f64 = components.iter().map(|c| c.1).sum();
         for c in &mut components {
             c.1 /= total;

@@ -17,7 +17,7 @@ pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> St
         "normalization: {}, symmetrize: {}, lobes: {}\n\
          energy bound (diffuse + Σ lobe albedos ≤ 1): red {:.6}  green {:.6}  blue {:.6}  ok\n\
          maximum directional albedo: {:.4} ± {:.4} (3σ) in the {} channel at θ_o = {}°, φ_o = {}° ({} samples per direction)\n\
-         reciprocity error max|f(a,b) − f(b,a)| / max f: {:.3e} ({} pairs)\n",
+         reciprocity error max|f(a,b) − f(b,a)| / max f: {:.3e}; energy-weighted mean: {:.3e} ({} pairs)\n",
         m.normalization.name(),
         m.symmetrize,
         m.lobes.len(),
@@ -30,7 +30,8 @@ pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> St
         a.theta_deg,
         a.phi_deg,
         samples,
-        r.reciprocity,
+        r.reciprocity.max_rel,
+        r.reciprocity.mean_rel,
         pairs
     );
     if r.albedo_exceeds_one() {
@@ -56,7 +57,8 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
             "max_albedo": { "value": a.value, "std_err": a.std_err, "channel": CHANNELS[a.channel],
                             "theta_deg": a.theta_deg, "phi_deg": a.phi_deg, "samples": samples },
             "albedo_exceeds_one": r.albedo_exceeds_one(),
-            "reciprocity_error": r.reciprocity,
+            "reciprocity_error": r.reciprocity.max_rel,
+            "reciprocity_mean_error": r.reciprocity.mean_rel,
             "pairs": pairs,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);

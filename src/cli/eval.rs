@@ -50,7 +50,12 @@ pub fn run(material: &Path) -> anyhow::Result<()> {
     let mut out = String::new();
     for (wi, wo) in pairs {
         let f = m.eval(wi, wo);
-        out.push_str(&format!("{} {} {}\n", brdf_shop::fsio::shortest(f[0]), brdf_shop::fsio::shortest(f[1]), brdf_shop::fsio::shortest(f[2])));
+        out.push_str(&format!(
+            "{} {} {}\n",
+            brdf_shop::fsio::shortest(f[0]),
+            brdf_shop::fsio::shortest(f[1]),
+            brdf_shop::fsio::shortest(f[2])
+        ));
     }
     std::io::stdout().write_all(out.as_bytes())?;
     Ok(())
