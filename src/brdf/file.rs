@@ -130,12 +130,15 @@ impl Material {
                     format!("lobes[{k}].rotation: a quaternion of length {len} cannot be normalised"),
                 ));
             }
+            // A quaternion that is already unit to rounding is kept as written, so files read back
+            // bit for bit.
+            let rotation = if (len - 1.0).abs() < 1e-14 { q } else { q / len };
             lobes.push(Lobe {
                 albedo: l.albedo,
                 alpha_x: l.alpha_x,
                 alpha_y: l.alpha_y,
                 tangent_angle: l.tangent_angle,
-                rotation: q / len,
+                rotation,
                 split: l.split,
             });
         }
