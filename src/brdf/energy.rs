@@ -74,7 +74,7 @@ pub fn max_directional_albedo(m: &Material, n: usize) -> MaxAlbedo {
         .enumerate()
         .map(|(i, &(t, p))| {
             let e = directional_albedo(m, direction(t.to_radians(), p.to_radians()), n, i as u64);
-            let c = (0..3).max_by(|&a, &b| e.value[a].total_cmp(&e.value[b])).unwrap_or(0);
+            let c = (1..3).fold(0, |best, c| if e.value[c] > e.value[best] { c } else { best });
             MaxAlbedo { value: e.value[c], std_err: e.std_err[c], channel: c, theta_deg: t, phi_deg: p }
         })
         .collect::<Vec<_>>()
