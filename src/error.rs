@@ -28,15 +28,10 @@ impl Error {
         Error::Io { path: path.into(), source }
     }
 
-    /// Whether the user can fix this by changing their input (exit status 1).
+    /// Whether the user can fix this by changing their input (exit status 1). A file that cannot be
+    /// read or written (missing, a folder, no permission, disk full) is the user's to fix.
     pub fn is_user_error(&self) -> bool {
-        match self {
-            Error::Input { .. } | Error::Brush(_) => true,
-            Error::Io { source, .. } => matches!(
-                source.kind(),
-                std::io::ErrorKind::NotFound | std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::InvalidData
-            ),
-        }
+        matches!(self, Error::Input { .. } | Error::Brush(_) | Error::Io { .. })
     }
 }
 

@@ -20,7 +20,19 @@ fn main() -> ExitCode {
         Err(e) => {
             let user = e.chain().any(|c| c.downcast_ref::<brdf_shop::Error>().is_some_and(|e| e.is_user_error()))
                 || e.downcast_ref::<cli::UsageError>().is_some();
-            let msg = format!("{e:#}").replace('\n', " ");
+            // Each cause once: `{e:#}` repeats a source that its error already displays
+            // (`path: reason: reason`).
+            let mut msg = String::new();
+            for cause in e.chain() {
+                let text = cause.to_string();
+                if !msg.ends_with(&text) {
+                    if !msg.is_empty() {
+                        msg.push_str(": ");
+                    }
+                    msg.push_str(&text);
+                }
+            }
+            let msg = msg.replace('\n', " ");
             eprintln!("brdf-shop: {msg}");
             ExitCode::from(if user { 1 } else { 2 })
         }

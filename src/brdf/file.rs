@@ -53,15 +53,19 @@ pub(crate) fn parse_json<'de, T: Deserialize<'de>>(text: &'de str, origin: &str)
         return Err(Error::input(origin, "the file is empty"));
     }
     let de = &mut serde_json::Deserializer::from_str(text);
-    serde_path_to_error::deserialize(de).map_err(|e| {
+    let value = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
-        if path == "." || path.is_empty() {
+        // `?` is serde_path_to_error's unknown segment (e.g. end of file): it names no field.
+        if path == "." || path == "?" || path.is_empty() {
             Error::input(origin, inner.to_string())
         } else {
             Error::input(origin, format!("{path}: {inner}"))
         }
-    })
+    })?;
+    // Anything after the JSON value (a second object, stray text) makes the file invalid.
+    de.end().map_err(|e| Error::input(origin, e.to_string()))?;
+    Ok(value)
 }
 
 pub(crate) fn check_format(origin: &str, format: &str, want: &str, version: u32) -> Result<()> {

@@ -77,8 +77,12 @@ pub fn parse() -> Result<Cli, ExitCode> {
                 ExitCode::SUCCESS
             }
             _ => {
+                // The first paragraph: clap lists missing arguments on the lines after the first.
                 let text = e.to_string();
-                let first = text.lines().next().unwrap_or("bad command line").trim_start_matches("error: ");
+                let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
+                let first = first.join(" ");
+                let first = first.trim_start_matches("error: ");
+                let first = if first.is_empty() { "bad command line" } else { first };
                 eprintln!("brdf-shop: {first} (see brdf-shop --help)");
                 ExitCode::from(1)
             }
