@@ -120,7 +120,10 @@ impl<'a> MaterialSampler<'a> {
             let (views, n) = lobe.rotated_views(wo);
             let w = mean(lobe.albedo) * sym / n as f64;
             for (j, &b) in views[..n].iter().enumerate() {
-                components.push((Component::Forward { lobe: k, b }, w));
+                // A view rotated below the horizon makes the lobe term 0: nothing to sample there.
+                if b.z > 0.0 {
+                    components.push((Component::Forward { lobe: k, b }, w));
+                }
                 if material.symmetrize {
                     components.push((Component::Reverse { lobe: k, inverse: j == 1 }, w));
                 }

@@ -157,20 +157,20 @@ impl Strokes {
 /// step once per point.
 pub fn apply(m: &Material, s: &Settings, st: &Stroke) -> Result<Material> {
     let pts: Vec<(f64, f64)> = st.points.iter().map(|p| (p[0], p[1])).collect();
-    let first = *pts.first().ok_or_else(|| Error::Brush("a stroke needs at least one point".into()))?;
-    if st.brush == BrushKind::Create {
-        return brushes::create(m, s, first).map(|(m, _)| m);
-    }
-    let k = match st.lobe {
-        Some(k) => k,
-        None => brushes::lobe_under(m, &s.canvas, first)
-            .ok_or_else(|| Error::Brush(format!("no highlight under point ({:.4}, {:.4})", first.0, first.1)))?,
+    let (Some(&first), Some(&last)) = (pts.first(), pts.last()) else {
+        return Err(Error::Brush("a stroke needs at least one point".into()));
     };
-    let last = pts[pts.len() - 1];
+    let lobe = || match st.lobe {
+        Some(k) => Ok(k),
+        None => brushes::lobe_under(m, &s.canvas, first)
+            .ok_or_else(|| Error::Brush(format!("no highlight under point ({:.4}, {:.4})", first.0, first.1))),
+    };
     match st.brush {
-        BrushKind::Modify => brushes::modify(m, s, k, last),
-        BrushKind::Streak => brushes::streak(m, s, k, last),
+        BrushKind::Create => brushes::create(m, s, first).map(|(m, _)| m),
+        BrushKind::Modify => brushes::modify(m, s, lobe()?, last),
+        BrushKind::Streak => brushes::streak(m, s, lobe()?, last),
         BrushKind::Intensify | BrushKind::Deintensify => {
+            let k = lobe()?;
             let mut out = m.clone();
             for _ in &pts {
                 out = if st.brush == BrushKind::Intensify {
@@ -181,6 +181,5 @@ pub fn apply(m: &Material, s: &Settings, st: &Stroke) -> Result<Material> {
             }
             Ok(out)
         }
-        BrushKind::Create => unreachable!("handled above"),
     }
 }
