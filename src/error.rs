@@ -11,6 +11,12 @@ pub enum Error {
     /// A brush stroke that cannot be applied where it was made.
     #[error("{0}")]
     Brush(String),
+    /// A Vulkan call failed.
+    #[error("{call} failed: {result}{}", if *.result == ash::vk::Result::ERROR_DEVICE_LOST { " (device lost)" } else if matches!(*.result, ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | ash::vk::Result::ERROR_OUT_OF_HOST_MEMORY) { " (out of memory)" } else { "" })]
+    Vulkan { call: &'static str, result: ash::vk::Result },
+    /// No usable Vulkan device (exit status 2); the message says how to get one.
+    #[error("{0}")]
+    NoDevice(String),
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -32,6 +38,10 @@ impl Error {
     /// read or written (missing, a folder, no permission, disk full) is the user's to fix.
     pub fn is_user_error(&self) -> bool {
         matches!(self, Error::Input { .. } | Error::Brush(_) | Error::Io { .. })
+    }
+
+    pub fn is_device_lost(&self) -> bool {
+        matches!(self, Error::Vulkan { result: ash::vk::Result::ERROR_DEVICE_LOST, .. })
     }
 }
 

@@ -2,6 +2,7 @@
 //! BRDF (Colbert, Pattanaik, Křivánek 2006, "BRDF-Shop").
 //!
 //! `brdf` is the model, `brush` the canvas and the brushes; both are plain Rust with no GPU code.
+//! `vk` owns everything Vulkan.
 
 // `!(x > 0.0)` is how this code says "not a positive number, NaN included"; the lint would
 // have it written `x <= 0.0`, which lets NaN through. Per-channel `for c in 0..3` loops read
@@ -13,5 +14,6 @@ pub mod brush;
 pub mod error;
 pub mod fsio;
 pub mod rng;
+pub mod vk;
 
 pub use error::{Error, Result};

@@ -3,6 +3,7 @@
 
 mod check;
 mod demo;
+mod devices;
 mod eval;
 mod paint;
 
@@ -57,6 +58,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The Vulkan devices the renderer can use, and the one it picks.
+    Devices,
     /// The headless main job: paint the embedded default strokes onto the scratch material, write the
     /// material, a canvas image and the energy report into a folder.
     Demo {
@@ -94,6 +97,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         None => demo::run(&PathBuf::from("brdf-shop-demo")),
         Some(Command::Demo { out }) => demo::run(&out),
+        Some(Command::Devices) => devices::run(),
         Some(Command::Eval { material }) => eval::run(&material),
         Some(Command::Paint { strokes, material, out }) => paint::run(&strokes, material.as_deref(), &out),
         Some(Command::Check { material, samples, pairs, json }) => check::run(&material, samples, pairs, json),

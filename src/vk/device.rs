@@ -1,0 +1,126 @@
+//! Physical-device choice and the logical device with its one graphics+compute queue.
+//! Choice: discrete > integrated > virtual > CPU (lavapipe), or by name through `BRDF_SHOP_DEVICE`.
+
+use std::ffi::CStr;
+
+use ash::vk;
+
+use super::Instance;
+use crate::error::{Error, Result};
+
+pub struct Device {
+    pub physical: vk::PhysicalDevice,
+    pub raw: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+}
+
+/// A Vulkan 1.3 device the program can use.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    pub physical: vk::PhysicalDevice,
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub queue_family: u32,
+    pub timestamp_period: f32,
+}
+
+fn rank(kind: vk::PhysicalDeviceType) -> u32 {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+/// Every Vulkan 1.3 device with a graphics+compute queue, best first.
+pub fn candidates(instance: &Instance) -> Result<Vec<Candidate>> {
+    // SAFETY: the instance is live.
+    let physicals = unsafe { instance.raw.enumerate_physical_devices() }
+        .map_err(|result| Error::Vulkan { call: "vkEnumeratePhysicalDevices", result })?;
+    let mut out = Vec::new();
+    for physical in physicals {
+        // SAFETY: `physical` came from this instance.
+        let (props, families) = unsafe {
+            (
+                instance.raw.get_physical_device_properties(physical),
+                instance.raw.get_physical_device_queue_family_properties(physical),
+            )
+        };
+        if props.api_version < vk::API_VERSION_1_3 {
+            continue;
+        }
+        let want = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+        let Some(family) = families.iter().position(|f| f.queue_flags.contains(want) && f.timestamp_valid_bits > 0)
+        else {
+            continue;
+        };
+        let name = CStr::from_bytes_until_nul(bytemuck_name(&props.device_name))
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_else(|_| "unnamed device".into());
+        out.push(Candidate {
+            physical,
+            name,
+            kind: props.device_type,
+            queue_family: family as u32,
+            timestamp_period: props.limits.timestamp_period,
+        });
+    }
+    out.sort_by_key(|c| rank(c.kind));
+    Ok(out)
+}
+
+fn bytemuck_name(name: &[std::ffi::c_char]) -> &[u8] {
+    // SAFETY: `c_char` and `u8` have the same size and alignment; the slice covers the same bytes.
+    unsafe { std::slice::from_raw_parts(name.as_ptr().cast::<u8>(), name.len()) }
+}
+
+impl Device {
+    pub fn new(instance: &Instance, filter: Option<&str>) -> Result<Device> {
+        let all = candidates(instance)?;
+        let chosen = match filter {
+            Some(f) => all.iter().find(|c| c.name.to_lowercase().contains(&f.to_lowercase())).ok_or_else(|| {
+                let names: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+                Error::NoDevice(format!("no Vulkan device named like \"{f}\" (found: {})", names.join(", ")))
+            })?,
+            None => all.first().ok_or_else(|| {
+                Error::NoDevice("no Vulkan 1.3 device found; run tools/setup to install Mesa lavapipe".into())
+            })?,
+        };
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(chosen.queue_family)
+            .queue_priorities(&priorities)];
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        // SAFETY: `chosen.physical` belongs to this instance; `info` outlives the call.
+        let raw = unsafe { instance.raw.create_device(chosen.physical, &info, None) }
+            .map_err(|result| Error::Vulkan { call: "vkCreateDevice", result })?;
+        // SAFETY: queue 0 of the family was requested above.
+        let queue = unsafe { raw.get_device_queue(chosen.queue_family, 0) };
+        Ok(Device {
+            physical: chosen.physical,
+            raw,
+            queue,
+            queue_family: chosen.queue_family,
+            name: chosen.name.clone(),
+            kind: chosen.kind,
+            timestamp_period: chosen.timestamp_period,
+        })
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: nothing else uses the device once its owner drops it; wait, then destroy once.
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            self.raw.destroy_device(None);
+        }
+    }
+}
