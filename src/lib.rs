@@ -13,7 +13,9 @@ pub mod brdf;
 pub mod brush;
 pub mod error;
 pub mod fsio;
+pub mod reference;
 pub mod rng;
+pub mod scene;
 pub mod vk;
 
 pub use error::{Error, Result};
