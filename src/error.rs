@@ -14,6 +14,9 @@ pub enum Error {
     /// A Vulkan call failed.
     #[error("{call} failed: {result}{}", if *.result == ash::vk::Result::ERROR_DEVICE_LOST { " (device lost)" } else if matches!(*.result, ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | ash::vk::Result::ERROR_OUT_OF_HOST_MEMORY) { " (out of memory)" } else { "" })]
     Vulkan { call: &'static str, result: ash::vk::Result },
+    /// The validation layer reported an error: a bug in this program.
+    #[error("Vulkan validation: {0}")]
+    Validation(String),
     /// No usable Vulkan device (exit status 2); the message says how to get one.
     #[error("{0}")]
     NoDevice(String),

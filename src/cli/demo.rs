@@ -12,13 +12,6 @@ use image::ImageEncoder;
 
 pub const DEFAULT_STROKES: &str = include_str!("../../assets/default.strokes.json");
 
-/// Linear radiance → 8-bit sRGB (SPEC §1 PNG output: exposure, transfer curve, clamp).
-pub fn srgb8(v: f64, exposure: f64) -> u8 {
-    let x = (v * exposure).clamp(0.0, 1.0);
-    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
-}
-
 pub fn run(out: &Path) -> anyhow::Result<()> {
     let strokes = Strokes::from_json(DEFAULT_STROKES, "embedded default strokes")?;
     let m = strokes.replay(&Material::scratch(), "embedded default strokes")?;
@@ -30,7 +23,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let img = settings.canvas.image(&m, SIZE);
     let mut rgb = Vec::with_capacity(SIZE * SIZE * 3);
     for p in &img {
-        rgb.extend(p.map(|v| srgb8(v, 0.5)));
+        rgb.extend(p.map(|v| brdf_shop::imageio::srgb8(v, 0.5)));
     }
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)

@@ -6,6 +6,9 @@ mod demo;
 mod devices;
 mod eval;
 mod paint;
+mod reference;
+mod render;
+mod scene;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -58,6 +61,10 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Headless GPU render of the material on a mesh under an environment, or of the canvas.
+    Render(scene::SceneArgs),
+    /// The same image on the CPU, converged (ground truth).
+    Reference(scene::SceneArgs),
     /// The Vulkan devices the renderer can use, and the one it picks.
     Devices,
     /// The headless main job: paint the embedded default strokes onto the scratch material, write the
@@ -98,6 +105,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         None => demo::run(&PathBuf::from("brdf-shop-demo")),
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
+        Some(Command::Render(args)) => render::run(&args),
+        Some(Command::Reference(args)) => reference::run(&args),
         Some(Command::Eval { material }) => eval::run(&material),
         Some(Command::Paint { strokes, material, out }) => paint::run(&strokes, material.as_deref(), &out),
         Some(Command::Check { material, samples, pairs, json }) => check::run(&material, samples, pairs, json),

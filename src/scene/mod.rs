@@ -7,6 +7,6 @@ pub mod camera;
 pub mod env;
 pub mod mesh;
 
-
-
-
+pub use camera::Camera;
+pub use env::Environment;
+pub use mesh::Mesh;

@@ -17,6 +17,9 @@ pub struct Device {
     pub kind: vk::PhysicalDeviceType,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
+    pub timestamp_valid_bits: u32,
+    pub limits: vk::PhysicalDeviceLimits,
+    debug_utils: ash::ext::debug_utils::Device,
 }
 
 /// A Vulkan 1.3 device the program can use.
@@ -97,14 +100,26 @@ impl Device {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(chosen.queue_family)
             .queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            .maintenance4(true);
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).push_next(&mut features13);
         // SAFETY: `chosen.physical` belongs to this instance; `info` outlives the call.
         let raw = unsafe { instance.raw.create_device(chosen.physical, &info, None) }
             .map_err(|result| Error::Vulkan { call: "vkCreateDevice", result })?;
         // SAFETY: queue 0 of the family was requested above.
         let queue = unsafe { raw.get_device_queue(chosen.queue_family, 0) };
+        // SAFETY: `chosen.physical` belongs to this instance.
+        let props = unsafe { instance.raw.get_physical_device_properties(chosen.physical) };
+        // SAFETY: as above.
+        let families = unsafe { instance.raw.get_physical_device_queue_family_properties(chosen.physical) };
+        let debug_utils = ash::ext::debug_utils::Device::new(&instance.raw, &raw);
         Ok(Device {
             physical: chosen.physical,
+            debug_utils,
+            limits: props.limits,
+            timestamp_valid_bits: families[chosen.queue_family as usize].timestamp_valid_bits,
             raw,
             queue,
             queue_family: chosen.queue_family,
@@ -112,6 +127,18 @@ impl Device {
             kind: chosen.kind,
             timestamp_period: chosen.timestamp_period,
         })
+    }
+}
+
+impl Device {
+    /// Names a Vulkan object for validation messages and captures.
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Ok(name) = std::ffi::CString::new(name) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        // SAFETY: `handle` is a live object of this device; naming is advisory, a failure is ignored.
+        let _ = unsafe { self.debug_utils.set_debug_utils_object_name(&info) };
     }
 }
 

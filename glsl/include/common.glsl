@@ -1,0 +1,49 @@
+// Shared by every pass: constants, quaternions, the SPEC §1 shading frame and equirect mapping.
+#ifndef COMMON_GLSL
+#define COMMON_GLSL
+
+const float PI = 3.14159265358979;
+
+// Rotates v by the unit quaternion q = (x, y, z, w).
+vec3 quat_rotate(vec4 q, vec3 v) {
+    vec3 t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+vec4 quat_conjugate(vec4 q) { return vec4(-q.xyz, q.w); }
+
+// SPEC §1: t = normalize(Y × n), or (1,0,0) made orthogonal to n where |Y × n| < 1e-6; b = n × t.
+struct Frame { vec3 t; vec3 b; vec3 n; };
+
+Frame frame_from_normal(vec3 n) {
+    vec3 c = cross(vec3(0.0, 1.0, 0.0), n);
+    vec3 t = length(c) < 1e-6 ? normalize(vec3(1.0, 0.0, 0.0) - n.x * n) : normalize(c);
+    return Frame(t, cross(n, t), n);
+}
+
+vec3 to_local(Frame f, vec3 v) { return vec3(dot(v, f.t), dot(v, f.b), dot(v, f.n)); }
+vec3 to_world(Frame f, vec3 v) { return v.x * f.t + v.y * f.b + v.z * f.n; }
+
+// SPEC §1 equirect mapping: u = fract(atan2(d.x, −d.z) / 2π), v = acos(d.y) / π.
+vec2 equirect_uv(vec3 d) {
+    float u = atan(d.x, -d.z) / (2.0 * PI);
+    return vec2(fract(u), acos(clamp(d.y, -1.0, 1.0)) / PI);
+}
+
+vec3 equirect_dir(vec2 uv) {
+    float phi = 2.0 * PI * uv.x;
+    float theta = PI * uv.y;
+    float s = sin(theta);
+    return vec3(s * sin(phi), cos(theta), -s * cos(phi));
+}
+
+// A 32-bit integer hash (PCG output permutation) for per-pixel sequence rotations.
+uint hash_u32(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+float hash_unit(uint v) { return float(hash_u32(v) >> 8) * (1.0 / 16777216.0); }
+
+#endif

@@ -1,0 +1,43 @@
+//! `brdf-shop reference`: the same image as `render`, on the CPU from the `f64` model — converged
+//! by multiple importance sampling between the environment and the material (mesh views), or the
+//! exact point-lit canvas (canvas views). The ground truth for tests and reports.
+
+use std::time::Instant;
+
+use brdf_shop::brush::canvas::Canvas;
+use brdf_shop::reference;
+use brdf_shop::render::View;
+
+use super::scene::{self, SceneArgs};
+
+pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
+    let scene = scene::load(args, |_| 1024)?;
+    let s = &scene.settings;
+    let start = Instant::now();
+    let image = match s.view {
+        View::Mesh => {
+            let (env, mesh) =
+                (scene.env.as_ref().expect("loaded for mesh views"), scene.mesh.as_ref().expect("loaded"));
+            reference::render_mesh(&scene.material, env, mesh, &s.camera, s.width, s.height, s.spp, true)
+        }
+        View::Canvas => {
+            let canvas = Canvas { light: s.light, intensity: s.intensity };
+            reference::render_canvas(&scene.material, &canvas, s.width, s.height)
+        }
+    };
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    brdf_shop::imageio::write(&args.out, image.width, image.height, &image.pixels, args.exposure)?;
+    if let Some(path) = &args.timings {
+        scene::write_timings(path, "cpu (reference)", &scene, &[("reference".to_string(), ms)])?;
+    }
+    scene::report_env(&scene);
+    eprintln!(
+        "reference {}x{} at {} spp in {:.1} s; wrote {}",
+        image.width,
+        image.height,
+        s.spp,
+        ms / 1e3,
+        args.out.display()
+    );
+    Ok(())
+}

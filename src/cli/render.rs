@@ -1,0 +1,39 @@
+//! `brdf-shop render`: one headless GPU frame (SPEC §4) written as EXR or PNG, with `--timings`.
+
+use brdf_shop::render::{Estimator, Renderer};
+use brdf_shop::vk::Context;
+
+use super::scene::{self, SceneArgs};
+
+pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
+    let scene = scene::load(args, |e| if e == Estimator::Mis { 1024 } else { 8 })?;
+    let mut renderer = Renderer::new(Context::from_env()?)?;
+    if let Some(env) = &scene.env {
+        renderer.set_environment(env)?;
+    }
+    if let Some(mesh) = &scene.mesh {
+        renderer.set_mesh(mesh)?;
+    }
+    if !renderer.linear_filtering() {
+        eprintln!(
+            "warning: this device cannot filter RGBA32F linearly; the environment is read with nearest filtering"
+        );
+    }
+    let frame = renderer.render(&scene.material, &scene.settings)?;
+    brdf_shop::imageio::write(&args.out, frame.image.width, frame.image.height, &frame.image.pixels, args.exposure)?;
+    if let Some(path) = &args.timings {
+        let passes: Vec<(String, f64)> = frame.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
+        scene::write_timings(path, renderer.device_name(), &scene, &passes)?;
+    }
+    let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
+    scene::report_env(&scene);
+    eprintln!(
+        "rendered {}x{} on {} in {total:.3} ms of GPU time ({} passes); wrote {}",
+        frame.image.width,
+        frame.image.height,
+        renderer.device_name(),
+        frame.timings.len(),
+        args.out.display()
+    );
+    Ok(())
+}

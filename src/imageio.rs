@@ -1,0 +1,63 @@
+//! Image output (SPEC §1): EXR is the linear RGBA estimate, unclamped (alpha = coverage); PNG is the
+//! linear image times `exposure`, then the sRGB curve, clamped — for looking at, never for measuring.
+//! Both are written atomically: a failure leaves no half-written file.
+
+use std::path::Path;
+
+use exr::prelude::{Encoding, Layer, LayerAttributes, SpecificChannels, WritableImage};
+
+use crate::error::{Error, Result};
+use crate::fsio::write_atomic;
+
+/// Linear radiance → 8-bit sRGB: exposure, the sRGB transfer curve, clamped; NaN → 0.
+pub fn srgb8(v: f64, exposure: f64) -> u8 {
+    let x = (v * exposure).clamp(0.0, 1.0);
+    let x = if x.is_nan() { 0.0 } else { x };
+    let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// Writes `.exr` (linear float RGBA) or `.png` (exposure + sRGB) by the path's extension.
+pub fn write(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> Result<()> {
+    let origin = path.display().to_string();
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let bytes = match ext.as_deref() {
+        Some("exr") => {
+            exr_bytes(width, height, pixels).map_err(|e| Error::input(&origin, format!("cannot encode EXR: {e}")))?
+        }
+        Some("png") => png_bytes(width, height, pixels, exposure)
+            .map_err(|e| Error::input(&origin, format!("cannot encode PNG: {e}")))?,
+        _ => return Err(Error::input(origin, "the output must end in .exr or .png")),
+    };
+    write_atomic(path, &bytes)
+}
+
+/// Whether `path` names an output format this module writes.
+pub fn check_output_path(path: &Path) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("exr") | Some("png") => Ok(()),
+        _ => Err(Error::input(path.display().to_string(), "the output must end in .exr or .png")),
+    }
+}
+
+fn exr_bytes(width: u32, height: u32, pixels: &[[f32; 4]]) -> std::result::Result<Vec<u8>, exr::error::Error> {
+    let w = width as usize;
+    let channels = SpecificChannels::rgba(|pos: exr::math::Vec2<usize>| {
+        let p = pixels[pos.y() * w + pos.x()];
+        (p[0], p[1], p[2], p[3])
+    });
+    let layer =
+        Layer::new((w, height as usize), LayerAttributes::named("brdf-shop"), Encoding::FAST_LOSSLESS, channels);
+    let image = exr::image::Image::from_layer(layer);
+    let mut cursor = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut cursor)?;
+    Ok(cursor.into_inner())
+}
+
+fn png_bytes(width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> image::ImageResult<Vec<u8>> {
+    use image::ImageEncoder;
+    let rgb: Vec<u8> = pixels.iter().flat_map(|p| [p[0], p[1], p[2]].map(|v| srgb8(v as f64, exposure))).collect();
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png).write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)?;
+    Ok(png)
+}

@@ -1,0 +1,42 @@
+//! The canvas pass (SPEC §1): the material on the point-lit unit sphere, written to the whole
+//! accumulation image (alpha 1 on the sphere). The only pass of a canvas view.
+
+use ash::vk;
+
+use super::Recording;
+use crate::vk::descriptor::Binding;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{Buffer, Context};
+use crate::Result;
+
+const BINDINGS: [vk::DescriptorType; 2] = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
+
+pub struct CanvasPass {
+    pipeline: Pipeline,
+}
+
+impl CanvasPass {
+    pub fn new(ctx: &Context) -> Result<CanvasPass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("canvas.comp"), "canvas", &BINDINGS, 128, &[])?;
+        Ok(CanvasPass { pipeline })
+    }
+
+    pub fn record(&self, rec: &Recording<'_>, material: &Buffer) -> Result<()> {
+        let t = rec.targets;
+        t.accum.barrier(
+            rec.ctx,
+            rec.cmd,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::GENERAL,
+            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+        );
+        let set = rec.set(&self.pipeline, &[Binding::StorageImage(t.accum.view), Binding::Storage(material)])?;
+        rec.dispatch(&self.pipeline, set, &rec.push);
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}

@@ -1,0 +1,50 @@
+//! Pass 2 (paper §4): the diffuse term `ρ_d/π · E(n)` from the environment's 9 SH coefficients,
+//! added into the accumulation image. Left out when `ρ_d = 0`.
+
+use ash::vk;
+
+use super::Recording;
+use crate::vk::descriptor::Binding;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::Context;
+use crate::Result;
+
+const BINDINGS: [vk::DescriptorType; 4] = [
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
+];
+
+pub struct DiffusePass {
+    pipeline: Pipeline,
+}
+
+impl DiffusePass {
+    pub fn new(ctx: &Context) -> Result<DiffusePass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("diffuse.comp"), "diffuse", &BINDINGS, 128, &[])?;
+        Ok(DiffusePass { pipeline })
+    }
+
+    pub fn record(&self, rec: &Recording<'_>, diffuse: [f64; 3]) -> Result<()> {
+        let t = rec.targets;
+        let env = rec.env()?;
+        let set = rec.set(
+            &self.pipeline,
+            &[
+                Binding::StorageImage(t.position.view),
+                Binding::StorageImage(t.normal.view),
+                Binding::StorageImage(t.accum.view),
+                Binding::Storage(&env.sh),
+            ],
+        )?;
+        let mut push = rec.push;
+        push.fparams = [diffuse[0] as f32, diffuse[1] as f32, diffuse[2] as f32, 0.0];
+        rec.dispatch(&self.pipeline, set, &push);
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}

@@ -1,0 +1,71 @@
+//! The `mis` estimator pass: the whole material (diffuse included) by multiple importance sampling
+//! between the environment (CDF inversion over `|L| sin θ`) and the material's mixture, balance
+//! heuristic, deterministic QMC. Dispatched in chunks of samples so no dispatch runs long.
+
+use ash::vk;
+
+use super::Recording;
+use crate::vk::descriptor::Binding;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{Buffer, Context};
+use crate::Result;
+
+/// Samples per dispatch.
+pub const CHUNK: u32 = 32;
+
+const BINDINGS: [vk::DescriptorType; 9] = [
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
+];
+
+pub struct MisPass {
+    pipeline: Pipeline,
+}
+
+impl MisPass {
+    pub fn new(ctx: &Context) -> Result<MisPass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("mis.comp"), "mis", &BINDINGS, 128, &[])?;
+        Ok(MisPass { pipeline })
+    }
+
+    /// Adds the estimate over samples `0..samples` of the `sequence` buffer.
+    pub fn record(&self, rec: &Recording<'_>, samples: u32, material: &Buffer, sequence: &Buffer) -> Result<()> {
+        let t = rec.targets;
+        let env = rec.env()?;
+        let set = rec.set(
+            &self.pipeline,
+            &[
+                Binding::StorageImage(t.position.view),
+                Binding::StorageImage(t.normal.view),
+                Binding::StorageImage(t.accum.view),
+                Binding::Sampled(env.texture.view, env.sampler),
+                Binding::Storage(material),
+                Binding::Storage(sequence),
+                Binding::Storage(&env.marginal),
+                Binding::Storage(&env.conditional),
+                Binding::Storage(&env.pdf),
+            ],
+        )?;
+        let mut first = 0;
+        while first < samples {
+            let count = CHUNK.min(samples - first);
+            let mut push = rec.push;
+            push.params = [0, count, first, samples];
+            push.fparams[3] = 1.0 / samples as f32;
+            rec.dispatch(&self.pipeline, set, &push);
+            first += count;
+        }
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}

@@ -1,0 +1,429 @@
+//! The real-time renderer of paper §4 on Vulkan: per frame, the passes the scene needs —
+//!
+//! * mesh views: G-buffer → background → SH diffuse (when `ρ_d ≠ 0`) → one pass per lobe with
+//!   non-zero albedo (`fis`, `plain`), or G-buffer → background → `mis` (the whole material);
+//! * canvas views: the canvas pass alone.
+//!
+//! Each pass lives in its own file with `new / record / destroy`; this module decides which run,
+//! owns the per-size targets and the per-environment and per-mesh GPU data (rebuilt only when they
+//! change), times every pass with timestamp queries, and reads the image back.
+
+pub mod background;
+pub mod canvas;
+pub mod diffuse;
+pub mod environment;
+pub mod gbuffer;
+pub mod gpu;
+pub mod lobe;
+pub mod mesh;
+pub mod mis;
+pub mod targets;
+
+use ash::vk;
+use glam::DVec3;
+
+use crate::brdf::Material;
+use crate::error::{Error, Result};
+use crate::reference::Image;
+use crate::scene::{Camera, Environment, Mesh};
+use crate::vk::descriptor::{self, Binding};
+use crate::vk::pipeline::Pipeline;
+use crate::vk::query::{PassTime, Timestamps};
+use crate::vk::{readback, vk_err, Buffer, Context};
+
+use environment::GpuEnvironment;
+use gpu::Push;
+use mesh::GpuMesh;
+use targets::Targets;
+
+/// How the specular part (or, for `mis`, the whole material) is estimated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Estimator {
+    /// The paper's: Halton BRDF sampling of each lobe reading the prefiltered environment.
+    Fis,
+    /// The same samples reading level 0 only.
+    Plain,
+    /// Environment and BRDF sampling combined by the balance heuristic, diffuse included.
+    Mis,
+}
+
+impl Estimator {
+    pub fn parse(s: &str) -> Option<Estimator> {
+        match s {
+            "fis" => Some(Estimator::Fis),
+            "plain" => Some(Estimator::Plain),
+            "mis" => Some(Estimator::Mis),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Fis => "fis",
+            Estimator::Plain => "plain",
+            Estimator::Mis => "mis",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    Mesh,
+    Canvas,
+}
+
+/// What one frame renders.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel per lobe (`fis`, `plain`) or per pixel (`mis`).
+    pub spp: u32,
+    pub estimator: Estimator,
+    pub view: View,
+    pub camera: Camera,
+    /// The canvas light (unit) and its intensity.
+    pub light: DVec3,
+    pub intensity: f64,
+}
+
+/// A rendered frame: the linear image (alpha = coverage) and the GPU time of every pass that ran.
+pub struct Frame {
+    pub image: Image,
+    pub timings: Vec<PassTime>,
+}
+
+/// What a pass records with: the command buffer, this frame's descriptor pool, the shared push
+/// constants, the targets and the environment.
+pub struct Recording<'a> {
+    pub ctx: &'a Context,
+    pub cmd: vk::CommandBuffer,
+    pub pool: vk::DescriptorPool,
+    pub push: Push,
+    pub targets: &'a Targets,
+    pub env: Option<&'a GpuEnvironment>,
+}
+
+impl Recording<'_> {
+    pub fn env(&self) -> Result<&GpuEnvironment> {
+        self.env.ok_or_else(|| Error::input("render", "a mesh view needs an environment map (--env)"))
+    }
+
+    /// A descriptor set of `pipeline`'s layout pointing at `bindings`.
+    pub fn set(&self, pipeline: &Pipeline, bindings: &[Binding<'_>]) -> Result<vk::DescriptorSet> {
+        let set = descriptor::allocate(self.ctx, self.pool, pipeline.set_layout)?;
+        descriptor::write(self.ctx, set, bindings);
+        Ok(set)
+    }
+
+    /// Dispatches 8×8 groups over the image, then orders the accumulation image's writes before the
+    /// next pass's reads and writes.
+    pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+        pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
+        let (w, h) = (self.targets.width, self.targets.height);
+        // SAFETY: `cmd` is recording with a compute pipeline bound.
+        unsafe { self.ctx.raw().cmd_dispatch(self.cmd, w.div_ceil(8), h.div_ceil(8), 1) };
+        let b = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&b);
+        // SAFETY: `cmd` is recording.
+        unsafe { self.ctx.raw().cmd_pipeline_barrier2(self.cmd, &dep) };
+    }
+}
+
+struct Passes {
+    gbuffer: gbuffer::GBufferPass,
+    background: background::BackgroundPass,
+    diffuse: diffuse::DiffusePass,
+    lobe: lobe::LobePass,
+    mis: mis::MisPass,
+    canvas: canvas::CanvasPass,
+}
+
+impl Passes {
+    fn new(ctx: &Context) -> Result<Passes> {
+        Ok(Passes {
+            gbuffer: gbuffer::GBufferPass::new(ctx)?,
+            background: background::BackgroundPass::new(ctx)?,
+            diffuse: diffuse::DiffusePass::new(ctx)?,
+            lobe: lobe::LobePass::new(),
+            mis: mis::MisPass::new(ctx)?,
+            canvas: canvas::CanvasPass::new(ctx)?,
+        })
+    }
+
+    fn destroy(self, ctx: &Context) {
+        self.gbuffer.destroy(ctx);
+        self.background.destroy(ctx);
+        self.diffuse.destroy(ctx);
+        self.lobe.destroy(ctx);
+        self.mis.destroy(ctx);
+        self.canvas.destroy(ctx);
+    }
+}
+
+/// Owns the context and every GPU object of the renderer; dropped passes first, context last.
+pub struct Renderer {
+    passes: Option<Passes>,
+    env: Option<GpuEnvironment>,
+    mesh: Option<GpuMesh>,
+    targets: Option<Targets>,
+    halton: Option<(u32, Buffer)>,
+    sequence: Option<(u32, Buffer)>,
+    pub ctx: Context,
+}
+
+/// The camera's basis for `camera_ray` in `pass.glsl`.
+fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
+    let forward = (camera.target - camera.eye).normalize();
+    let right = forward.cross(camera.up).normalize();
+    let up = right.cross(forward);
+    let t = (camera.fov_deg.to_radians() / 2.0).tan();
+    let aspect = width as f64 / height as f64;
+    push.eye = gpu::vec4(camera.eye, 1.0);
+    push.right = gpu::vec4(right * t * aspect, 0.0);
+    push.up = gpu::vec4(up * t, 0.0);
+    push.forward = gpu::vec4(forward, 0.0);
+}
+
+impl Renderer {
+    pub fn new(ctx: Context) -> Result<Renderer> {
+        let passes = Passes::new(&ctx)?;
+        Ok(Renderer { passes: Some(passes), env: None, mesh: None, targets: None, halton: None, sequence: None, ctx })
+    }
+
+    pub fn device_name(&self) -> &str {
+        &self.ctx.device.name
+    }
+
+    /// Uploads the environment (mips, SH, sampling tables) unless it is the one already there.
+    pub fn set_environment(&mut self, env: &Environment) -> Result<()> {
+        if self.env.as_ref().is_some_and(|e| e.key == environment::key(env)) {
+            return Ok(());
+        }
+        let limit = self.ctx.device.limits.max_image_dimension2_d as usize;
+        if env.width > limit || env.height > limit {
+            return Err(Error::input(
+                env.origin.clone(),
+                format!("{}x{} exceeds the device's largest image ({limit})", env.width, env.height),
+            ));
+        }
+        if let Some(old) = self.env.take() {
+            old.destroy(&self.ctx);
+        }
+        self.env = Some(GpuEnvironment::new(&self.ctx, env)?);
+        Ok(())
+    }
+
+    /// Uploads the mesh unless it is the one already there.
+    pub fn set_mesh(&mut self, mesh: &Mesh) -> Result<()> {
+        if self.mesh.as_ref().is_some_and(|m| m.key == mesh::key(mesh)) {
+            return Ok(());
+        }
+        if let Some(old) = self.mesh.take() {
+            old.destroy(&self.ctx);
+        }
+        self.mesh = Some(GpuMesh::new(&self.ctx, mesh)?);
+        Ok(())
+    }
+
+    /// Whether the environment texture is filtered linearly (false only on devices without linear
+    /// filtering of `RGBA32F`).
+    pub fn linear_filtering(&self) -> bool {
+        self.env.as_ref().is_none_or(|e| e.linear)
+    }
+
+    fn check_size(&self, s: &Settings) -> Result<()> {
+        let limit = self.ctx.device.limits.max_image_dimension2_d;
+        if s.width == 0 || s.height == 0 {
+            return Err(Error::input("--size", format!("{}x{} is empty", s.width, s.height)));
+        }
+        if s.width > limit || s.height > limit {
+            return Err(Error::input(
+                "--size",
+                format!("{}x{} exceeds the device's largest image ({limit}x{limit})", s.width, s.height),
+            ));
+        }
+        if s.spp == 0 {
+            return Err(Error::input("--spp", "must be at least 1"));
+        }
+        Ok(())
+    }
+
+    fn buffers_for(&mut self, spp: u32, estimator: Estimator) -> Result<()> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        if estimator == Estimator::Mis {
+            if self.sequence.as_ref().is_none_or(|s| s.0 != spp) {
+                if let Some((_, b)) = self.sequence.take() {
+                    b.destroy(&self.ctx);
+                }
+                let seq = gpu::mis_sequence(spp);
+                self.sequence =
+                    Some((spp, Buffer::upload(&self.ctx, bytemuck::cast_slice(&seq), usage, "mis.sequence")?));
+            }
+        } else if self.halton.as_ref().is_none_or(|s| s.0 != spp) {
+            if let Some((_, b)) = self.halton.take() {
+                b.destroy(&self.ctx);
+            }
+            let groups = gpu::halton_groups(spp);
+            self.halton = Some((spp, Buffer::upload(&self.ctx, bytemuck::cast_slice(&groups), usage, "halton")?));
+        }
+        Ok(())
+    }
+
+    /// Renders one frame of `material` as `settings` say.
+    pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
+        self.check_size(settings)?;
+        let (w, h) = (settings.width, settings.height);
+        let mesh_view = settings.view == View::Mesh;
+        if mesh_view && (self.env.is_none() || self.mesh.is_none()) {
+            return Err(Error::input("render", "a mesh view needs an environment and a mesh"));
+        }
+        if self.targets.as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
+            if let Some(old) = self.targets.take() {
+                old.destroy(&self.ctx);
+            }
+            self.targets = Some(Targets::new(&self.ctx, w, h)?);
+        }
+        // Which lobes get a pass: non-zero albedo only.
+        let prefilter = settings.estimator == Estimator::Fis;
+        let lobes: Vec<(u32, lobe::Variant)> = material
+            .lobes
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
+            .map(|(i, l)| (i as u32, lobe::Variant::of(material, l, prefilter)))
+            .collect();
+        if mesh_view {
+            self.buffers_for(settings.spp, settings.estimator)?;
+            if settings.estimator != Estimator::Mis {
+                let variants: Vec<_> = lobes.iter().map(|l| l.1).collect();
+                self.passes.as_mut().expect("passes live until drop").lobe.prepare(&self.ctx, &variants)?;
+            }
+        }
+
+        let ctx = &self.ctx;
+        let material_buf =
+            Buffer::upload(ctx, &gpu::material_bytes(material), vk::BufferUsageFlags::STORAGE_BUFFER, "material")?;
+        let mut frame_objects =
+            FrameObjects { material: Some(material_buf), readback: None, pool: None, timestamps: None };
+        let result = (|| -> Result<Frame> {
+            let targets = self.targets.as_ref().expect("made above");
+            frame_objects.readback = Some(readback::buffer_for(ctx, &targets.accum)?);
+            frame_objects.pool = Some(descriptor::pool(ctx, 8 + lobes.len() as u32, "frame.descriptors")?);
+            frame_objects.timestamps = Some(Timestamps::new(ctx, 4 + lobes.len() as u32)?);
+            let passes = self.passes.as_ref().expect("passes live until drop");
+            let mut push = Push::default();
+            camera_push(&settings.camera, w, h, &mut push);
+            let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
+            push.size = [w, h, ew, eh];
+            push.light = gpu::vec4(settings.light, settings.intensity as f32);
+            let rec_base = Recording {
+                ctx,
+                cmd: ctx.commands.buffer,
+                pool: frame_objects.pool.expect("made above"),
+                push,
+                targets,
+                env: self.env.as_ref(),
+            };
+            let material_buf = frame_objects.material.as_ref().expect("made above");
+            let readback_buf = frame_objects.readback.as_ref().expect("made above");
+            let ts = frame_objects.timestamps.as_mut().expect("made above");
+            ctx.commands.run(&ctx.device, |cmd| {
+                let rec = Recording { cmd, ..rec_base };
+                ts.reset(ctx, cmd);
+                if !mesh_view {
+                    ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf))?;
+                } else {
+                    let mesh = self.mesh.as_ref().expect("checked above");
+                    let vp = settings.camera.view_proj(w, h);
+                    ts.time(ctx, cmd, "gbuffer", || {
+                        passes.gbuffer.record(ctx, cmd, targets, mesh, &vp);
+                        Ok(())
+                    })?;
+                    ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
+                    match settings.estimator {
+                        Estimator::Mis => {
+                            let seq = &self.sequence.as_ref().expect("made above").1;
+                            ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, settings.spp, material_buf, seq))?;
+                        }
+                        Estimator::Fis | Estimator::Plain => {
+                            if material.diffuse.iter().any(|&d| d != 0.0) {
+                                ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse))?;
+                            }
+                            let halton = &self.halton.as_ref().expect("made above").1;
+                            for &(i, v) in &lobes {
+                                let name = format!("lobe{i}[{}]", v.tag());
+                                ts.time(ctx, cmd, &name, || {
+                                    passes.lobe.record(&rec, v, i, settings.spp, material_buf, halton)
+                                })?;
+                            }
+                        }
+                    }
+                }
+                readback::record(ctx, cmd, &targets.accum, vk::ImageLayout::GENERAL, readback_buf);
+                Ok(())
+            })?;
+            let timings = ts.read(ctx)?;
+            let pixels = readback::pixels(readback_buf);
+            Ok(Frame { image: Image { width: w, height: h, pixels }, timings })
+        })();
+        frame_objects.destroy(ctx);
+        let frame = result?;
+        ctx.check_validation()?;
+        Ok(frame)
+    }
+}
+
+/// The objects of one frame, destroyed after it whatever happened.
+struct FrameObjects {
+    material: Option<Buffer>,
+    readback: Option<Buffer>,
+    pool: Option<vk::DescriptorPool>,
+    timestamps: Option<Timestamps>,
+}
+
+impl FrameObjects {
+    fn destroy(self, ctx: &Context) {
+        // SAFETY: `Commands::run` waited for the submission (or nothing was submitted).
+        let _ = unsafe { ctx.raw().device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"));
+        if let Some(b) = self.material {
+            b.destroy(ctx);
+        }
+        if let Some(b) = self.readback {
+            b.destroy(ctx);
+        }
+        if let Some(p) = self.pool {
+            // SAFETY: no pending work uses the pool's sets.
+            unsafe { ctx.raw().destroy_descriptor_pool(p, None) };
+        }
+        if let Some(t) = self.timestamps {
+            t.destroy(ctx);
+        }
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // SAFETY: nothing else submits work; everything below is destroyed once.
+        let _ = unsafe { self.ctx.raw().device_wait_idle() };
+        if let Some(p) = self.passes.take() {
+            p.destroy(&self.ctx);
+        }
+        if let Some(e) = self.env.take() {
+            e.destroy(&self.ctx);
+        }
+        if let Some(m) = self.mesh.take() {
+            m.destroy(&self.ctx);
+        }
+        if let Some(t) = self.targets.take() {
+            t.destroy(&self.ctx);
+        }
+        for b in [self.halton.take(), self.sequence.take()].into_iter().flatten() {
+            b.1.destroy(&self.ctx);
+        }
+    }
+}

@@ -1,0 +1,62 @@
+//! The images a frame renders into, per image size: the G-buffer (world position with a coverage
+//! flag, world normal, depth) and the `RGBA32F` accumulation image the shading passes add into.
+
+use ash::vk;
+
+use crate::vk::{Context, Image};
+use crate::Result;
+
+pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+pub struct Targets {
+    pub width: u32,
+    pub height: u32,
+    pub position: Image,
+    pub normal: Image,
+    pub depth: Image,
+    pub accum: Image,
+}
+
+impl Targets {
+    pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
+        let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
+        let mut made: Vec<Image> = Vec::new();
+        let built = (|| -> Result<()> {
+            made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.position")?);
+            made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
+            made.push(Image::new(
+                ctx,
+                (width, height),
+                DEPTH_FORMAT,
+                1,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                "gbuffer.depth",
+            )?);
+            made.push(Image::new(
+                ctx,
+                (width, height),
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+                "accum",
+            )?);
+            Ok(())
+        })();
+        if let Err(e) = built {
+            for i in made {
+                i.destroy(ctx);
+            }
+            return Err(e);
+        }
+        let mut it = made.into_iter();
+        let mut next = || it.next().expect("four images were made");
+        Ok(Targets { width, height, position: next(), normal: next(), depth: next(), accum: next() })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        for i in [self.position, self.normal, self.depth, self.accum] {
+            i.destroy(ctx);
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! Descriptor set layouts, one pool per renderer, and the writes that point sets at buffers and
+//! images. Bindings are numbered in the order given.
+
+use ash::vk;
+
+use super::{vk_err, Buffer, Context};
+use crate::error::Result;
+
+/// A set layout with bindings `0..types.len()` of the given types, visible to `stages`.
+pub fn layout(
+    ctx: &Context,
+    types: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+    name: &str,
+) -> Result<vk::DescriptorSetLayout> {
+    let bindings: Vec<_> = types
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(t)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    // SAFETY: the device is live; the layout is destroyed by its owner.
+    let l = unsafe { ctx.raw().create_descriptor_set_layout(&info, None) }
+        .map_err(vk_err("vkCreateDescriptorSetLayout"))?;
+    ctx.device.set_name(l, name);
+    Ok(l)
+}
+
+/// A pool big enough for `sets` sets of up to 16 descriptors of each type the renderer uses.
+pub fn pool(ctx: &Context, sets: u32, name: &str) -> Result<vk::DescriptorPool> {
+    let sizes = [
+        vk::DescriptorType::STORAGE_BUFFER,
+        vk::DescriptorType::STORAGE_IMAGE,
+        vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        vk::DescriptorType::UNIFORM_BUFFER,
+    ]
+    .map(|ty| vk::DescriptorPoolSize { ty, descriptor_count: sets * 16 });
+    let info = vk::DescriptorPoolCreateInfo::default().max_sets(sets).pool_sizes(&sizes);
+    // SAFETY: the device is live; the pool is destroyed by its owner.
+    let p = unsafe { ctx.raw().create_descriptor_pool(&info, None) }.map_err(vk_err("vkCreateDescriptorPool"))?;
+    ctx.device.set_name(p, name);
+    Ok(p)
+}
+
+pub fn allocate(ctx: &Context, pool: vk::DescriptorPool, layout: vk::DescriptorSetLayout) -> Result<vk::DescriptorSet> {
+    let layouts = [layout];
+    let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+    // SAFETY: pool and layout are live objects of this device.
+    let sets = unsafe { ctx.raw().allocate_descriptor_sets(&info) }.map_err(vk_err("vkAllocateDescriptorSets"))?;
+    Ok(sets[0])
+}
+
+/// What one binding points at.
+pub enum Binding<'a> {
+    Storage(&'a Buffer),
+    StorageImage(vk::ImageView),
+    Sampled(vk::ImageView, vk::Sampler),
+}
+
+/// Points bindings `0..bindings.len()` of `set` at the given resources.
+pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
+    let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+        .iter()
+        .map(|b| match b {
+            Binding::Storage(buf) => [buf.descriptor()],
+            _ => [vk::DescriptorBufferInfo::default()],
+        })
+        .collect();
+    let images: Vec<[vk::DescriptorImageInfo; 1]> = bindings
+        .iter()
+        .map(|b| match *b {
+            Binding::StorageImage(view) => {
+                [vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)]
+            }
+            Binding::Sampled(view, sampler) => [vk::DescriptorImageInfo::default()
+                .image_view(view)
+                .sampler(sampler)
+                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
+            _ => [vk::DescriptorImageInfo::default()],
+        })
+        .collect();
+    let writes: Vec<vk::WriteDescriptorSet> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32);
+            match b {
+                Binding::Storage(_) => w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&buffers[i]),
+                Binding::StorageImage(_) => w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(&images[i]),
+                Binding::Sampled(..) => {
+                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(&images[i])
+                }
+            }
+        })
+        .collect();
+    // SAFETY: the set and every resource are live; the info arrays outlive the call.
+    unsafe { ctx.raw().update_descriptor_sets(&writes, &[]) };
+}
+
+impl Binding<'_> {
+    pub fn ty(&self) -> vk::DescriptorType {
+        match self {
+            Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        }
+    }
+}

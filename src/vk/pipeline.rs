@@ -1,0 +1,232 @@
+//! Pipelines with their layout and their one descriptor set layout: compute pipelines with
+//! specialisation constants (ids `0..n`, all `u32`), and the rasterising pipeline of the G-buffer
+//! (dynamic rendering, no render-pass objects).
+
+use ash::vk;
+
+use super::{descriptor, shader, vk_err, Context};
+use crate::error::Result;
+
+pub struct Pipeline {
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+    pub bind_point: vk::PipelineBindPoint,
+    pub push_stages: vk::ShaderStageFlags,
+}
+
+fn layouts(
+    ctx: &Context,
+    bindings: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+    push_size: u32,
+    name: &str,
+) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
+    let set_layout = descriptor::layout(ctx, bindings, stages, &format!("{name}.set"))?;
+    let set_layouts = [set_layout];
+    let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
+    let info = vk::PipelineLayoutCreateInfo::default()
+        .set_layouts(&set_layouts)
+        .push_constant_ranges(if push_size > 0 { &ranges[..] } else { &[] });
+    // SAFETY: the set layout is live; the pipeline layout is destroyed with the pipeline.
+    match unsafe { ctx.raw().create_pipeline_layout(&info, None) } {
+        Ok(l) => {
+            ctx.device.set_name(l, &format!("{name}.layout"));
+            Ok((set_layout, l))
+        }
+        Err(result) => {
+            // SAFETY: unused.
+            unsafe { ctx.raw().destroy_descriptor_set_layout(set_layout, None) };
+            Err(vk_err("vkCreatePipelineLayout")(result))
+        }
+    }
+}
+
+impl Pipeline {
+    /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`.
+    pub fn compute(
+        ctx: &Context,
+        spv: &[u8],
+        name: &str,
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        spec: &[u32],
+    ) -> Result<Pipeline> {
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        let module = shader::module(ctx, spv, name)?;
+        let (set_layout, layout) = match layouts(ctx, bindings, stages, push_size, name) {
+            Ok(l) => l,
+            Err(e) => {
+                // SAFETY: unused.
+                unsafe { ctx.raw().destroy_shader_module(module, None) };
+                return Err(e);
+            }
+        };
+        let entries: Vec<vk::SpecializationMapEntry> = (0..spec.len())
+            .map(|i| vk::SpecializationMapEntry { constant_id: i as u32, offset: 4 * i as u32, size: 4 })
+            .collect();
+        let data: Vec<u8> = spec.iter().flat_map(|v| v.to_ne_bytes()).collect();
+        let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(stages)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        // SAFETY: module and layout are live; the infos outlive the call.
+        let created = unsafe { ctx.raw().create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        // SAFETY: a module may be destroyed once the pipeline is created.
+        unsafe { ctx.raw().destroy_shader_module(module, None) };
+        let p = Pipeline {
+            raw: vk::Pipeline::null(),
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            push_stages: stages,
+        };
+        match created {
+            Ok(p2) => {
+                ctx.device.set_name(p2[0], name);
+                Ok(Pipeline { raw: p2[0], ..p })
+            }
+            Err((_, result)) => {
+                p.destroy(ctx);
+                Err(vk_err("vkCreateComputePipelines")(result))
+            }
+        }
+    }
+
+    /// The G-buffer pipeline: vertex buffer of `stride` bytes with `attributes` (location, format,
+    /// offset), triangle lists, no culling, depth test `LESS`, writes to `colors` and `depth`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn raster(
+        ctx: &Context,
+        (vert, frag): (&[u8], &[u8]),
+        name: &str,
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        stride: u32,
+        attributes: &[(u32, vk::Format, u32)],
+        colors: &[vk::Format],
+        depth: vk::Format,
+    ) -> Result<Pipeline> {
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let vs = shader::module(ctx, vert, &format!("{name}.vert"))?;
+        let fs = match shader::module(ctx, frag, &format!("{name}.frag")) {
+            Ok(m) => m,
+            Err(e) => {
+                // SAFETY: unused.
+                unsafe { ctx.raw().destroy_shader_module(vs, None) };
+                return Err(e);
+            }
+        };
+        let destroy_modules = || {
+            // SAFETY: modules may be destroyed once the pipeline is created (or failed).
+            unsafe {
+                ctx.raw().destroy_shader_module(vs, None);
+                ctx.raw().destroy_shader_module(fs, None);
+            }
+        };
+        let (set_layout, layout) = match layouts(ctx, bindings, stages, push_size, name) {
+            Ok(l) => l,
+            Err(e) => {
+                destroy_modules();
+                return Err(e);
+            }
+        };
+        let shader_stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
+        ];
+        let vb = [vk::VertexInputBindingDescription { binding: 0, stride, input_rate: vk::VertexInputRate::VERTEX }];
+        let va: Vec<_> = attributes
+            .iter()
+            .map(|&(location, format, offset)| vk::VertexInputAttributeDescription {
+                location,
+                binding: 0,
+                format,
+                offset,
+            })
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vb)
+            .vertex_attribute_descriptions(&va);
+        let assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let ds = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend: Vec<_> = colors
+            .iter()
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .collect();
+        let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering =
+            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(colors).depth_attachment_format(depth);
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&shader_stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&ms)
+            .depth_stencil_state(&ds)
+            .color_blend_state(&cb)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering)];
+        // SAFETY: modules and layout are live; the infos outlive the call.
+        let created = unsafe { ctx.raw().create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+        destroy_modules();
+        let p = Pipeline {
+            raw: vk::Pipeline::null(),
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            push_stages: stages,
+        };
+        match created {
+            Ok(p2) => {
+                ctx.device.set_name(p2[0], name);
+                Ok(Pipeline { raw: p2[0], ..p })
+            }
+            Err((_, result)) => {
+                p.destroy(ctx);
+                Err(vk_err("vkCreateGraphicsPipelines")(result))
+            }
+        }
+    }
+
+    /// Binds the pipeline, its descriptor set and the push constants.
+    pub fn bind(&self, ctx: &Context, cmd: vk::CommandBuffer, set: vk::DescriptorSet, push: &[u8]) {
+        // SAFETY: `cmd` is recording; pipeline, layout and set are live and compatible.
+        unsafe {
+            ctx.raw().cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            ctx.raw().cmd_bind_descriptor_sets(cmd, self.bind_point, self.layout, 0, &[set], &[]);
+            if !push.is_empty() {
+                ctx.raw().cmd_push_constants(cmd, self.layout, self.push_stages, 0, push);
+            }
+        }
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        // SAFETY: the GPU no longer uses the pipeline (work is waited on); each object once.
+        unsafe {
+            if self.raw != vk::Pipeline::null() {
+                ctx.raw().destroy_pipeline(self.raw, None);
+            }
+            ctx.raw().destroy_pipeline_layout(self.layout, None);
+            ctx.raw().destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

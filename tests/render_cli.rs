@@ -1,0 +1,180 @@
+//! `brdf-shop render` and `reference` through the binary: outputs, `--timings`, and every refusal
+//! (one line on stderr, exit 1, no output file left behind). Runs on this machine's Vulkan device
+//! (lavapipe in CI); debug builds run with the validation layer, whose errors fail a render.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use tempfile::TempDir;
+
+fn hdri(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/hdri").join(name).display().to_string()
+}
+
+fn mesh(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes").join(name).display().to_string()
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(args).output().expect("the binary runs");
+    let code = out.status.code().unwrap_or_else(|| panic!("killed by a signal: {:?}", out.status));
+    (code, String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+fn assert_refused((code, stdout, stderr): (i32, String, String), want: i32, names: &[&str]) {
+    assert_eq!(code, want, "exit status; stderr: {stderr}");
+    assert!(stdout.is_empty(), "{stdout}");
+    assert_eq!(stderr.lines().count(), 1, "one line on stderr, got {stderr:?}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for n in names {
+        assert!(stderr.contains(n), "stderr does not name {n:?}: {stderr}");
+    }
+}
+
+fn out(dir: &TempDir, name: &str) -> PathBuf {
+    dir.path().join(name)
+}
+
+#[test]
+fn render_writes_exr_png_and_timings() {
+    let dir = TempDir::new().unwrap();
+    let exr = out(&dir, "a.exr");
+    let timings = out(&dir, "t.json");
+    let (code, _, stderr) = run(&[
+        "render",
+        "--env",
+        &hdri("studio.exr"),
+        "--mesh",
+        "torus",
+        "--size",
+        "48x32",
+        "--out",
+        exr.to_str().unwrap(),
+        "--timings",
+        timings.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    // The loader's report names both counts and the negative energy fraction.
+    assert!(stderr.contains("negative texel(s) kept") && stderr.contains("% of the energy"), "{stderr}");
+    let env = brdf_shop::scene::Environment::load(&exr).expect("the output reads back as EXR");
+    assert_eq!((env.width, env.height), (48, 32));
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
+    let names: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    // The default material has a diffuse term and lobes: G-buffer, background, diffuse, lobes.
+    assert_eq!(&names[..3], ["gbuffer", "background", "diffuse"], "{names:?}");
+    assert!(names[3..].iter().all(|n| n.starts_with("lobe")) && names.len() > 3, "{names:?}");
+    assert!(t["passes"].as_array().unwrap().iter().all(|p| p["ms"].as_f64().unwrap() >= 0.0));
+
+    let png = out(&dir, "a.png");
+    let (code, _, stderr) = run(&[
+        "render",
+        "--view",
+        "canvas",
+        "--size",
+        "40x40",
+        "--out",
+        png.to_str().unwrap(),
+        "--timings",
+        timings.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let img = image::open(&png).expect("a PNG").to_rgb8();
+    assert_eq!(img.dimensions(), (40, 40));
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
+    let names: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["canvas"], "a canvas view runs the canvas pass alone");
+}
+
+#[test]
+fn obj_meshes_render() {
+    let dir = TempDir::new().unwrap();
+    let o = out(&dir, "bunny.exr");
+    let (code, _, stderr) = run(&[
+        "render",
+        "--env",
+        &hdri("city.exr"),
+        "--mesh",
+        &mesh("bunny.obj"),
+        "--size",
+        "32x32",
+        "--out",
+        o.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(o.exists());
+}
+
+#[test]
+fn refusals_name_the_problem_and_leave_no_file() {
+    let dir = TempDir::new().unwrap();
+    let o = out(&dir, "x.exr");
+    let os = o.to_str().unwrap();
+    let garbage = out(&dir, "garbage.exr");
+    std::fs::write(&garbage, b"not an exr").unwrap();
+    let bad_obj = out(&dir, "bad.obj");
+    std::fs::write(&bad_obj, "v 0 0 0\nf 1 2 3\n").unwrap();
+    let sky = hdri("sky.exr");
+    assert_refused(run(&["render", "--out", os]), 1, &["--env"]);
+    assert_refused(run(&["render", "--env", "/no/such.exr", "--out", os]), 1, &["/no/such.exr"]);
+    assert_refused(run(&["render", "--env", garbage.to_str().unwrap(), "--out", os]), 1, &["garbage.exr"]);
+    assert_refused(run(&["render", "--env", &sky, "--mesh", bad_obj.to_str().unwrap(), "--out", os]), 1, &["bad.obj"]);
+    assert_refused(run(&["render", "--env", &sky, "--mesh", "/no/such.obj", "--out", os]), 1, &["/no/such.obj"]);
+    assert_refused(run(&["render", "--env", &sky, "--size", "0x10", "--out", os]), 1, &["--size"]);
+    assert_refused(run(&["render", "--env", &sky, "--size", "ten", "--out", os]), 1, &["--size"]);
+    assert_refused(run(&["render", "--env", &sky, "--size", "100000x8", "--out", os]), 1, &["--size", "largest"]);
+    assert_refused(run(&["render", "--env", &sky, "--spp", "0", "--out", os]), 1, &["--spp"]);
+    assert_refused(
+        run(&["render", "--env", &sky, "--estimator", "mis", "--no-prefilter", "--out", os]),
+        1,
+        &["--no-prefilter"],
+    );
+    assert_refused(
+        run(&["render", "--env", &sky, "--camera", "eye=0,0,0 target=0,0,0", "--out", os]),
+        1,
+        &["--camera"],
+    );
+    assert_refused(run(&["render", "--view", "canvas", "--light", "0,0,0", "--out", os]), 1, &["--light"]);
+    assert_refused(run(&["render", "--env", &sky, "--out", out(&dir, "x.tiff").to_str().unwrap()]), 1, &["x.tiff"]);
+    assert_refused(run(&["render", "--env", &sky, "--frobnicate", "--out", os]), 1, &["--frobnicate"]);
+    assert_refused(run(&["reference", "--env", garbage.to_str().unwrap(), "--out", os]), 1, &["garbage.exr"]);
+    assert!(!o.exists(), "a refused render left {os}");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers.len(), 2, "only the two input files remain: {leftovers:?}");
+}
+
+#[test]
+fn no_vulkan_driver_is_exit_2_with_how_to() {
+    let dir = TempDir::new().unwrap();
+    let o = out(&dir, "x.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(["render", "--view", "canvas", "--out", o.to_str().unwrap()])
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("tools/setup"), "{stderr}");
+    assert!(!o.exists());
+}
+
+#[test]
+fn reference_writes_the_same_image_size() {
+    let dir = TempDir::new().unwrap();
+    let o = out(&dir, "r.exr");
+    let (code, _, stderr) = run(&[
+        "reference",
+        "--env",
+        &hdri("venice.exr"),
+        "--size",
+        "16x12",
+        "--spp",
+        "16",
+        "--out",
+        o.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let env = brdf_shop::scene::Environment::load(&o).expect("EXR");
+    assert_eq!((env.width, env.height), (16, 12));
+}
