@@ -3,6 +3,9 @@
 //! with the CPU reference by relative L1 over the pixels both cover (`reference::relative_l1`); on a
 //! failure the images go to `target/test-output/` for a look.
 
+// `!(err < bound)` fails on NaN too, which `err >= bound` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::too_many_arguments)]
+
 use std::path::{Path, PathBuf};
 
 use brdf_shop::brdf::{Lobe, Material, Normalization};
@@ -91,6 +94,7 @@ fn materials() -> Vec<(&'static str, Material)> {
 
 /// Renders `estimator` and the reference, returns the relative L1 over the object.
 fn compare(
+    bound: f64,
     r: &mut Renderer,
     name: &str,
     m: &Material,
@@ -109,7 +113,7 @@ fn compare(
     assert_finite(name, &gpu);
     let err = reference::relative_l1(&gpu, &cpu).expect("the sphere covers pixels");
     eprintln!("{name}: {} at {gpu_spp} spp vs reference at {ref_spp} spp: relative L1 {:.4}", estimator.name(), err);
-    if !(err.is_finite()) {
+    if !(err < bound) {
         dump(name, &[("gpu", &gpu), ("reference", &cpu)]);
     }
     err
@@ -119,8 +123,8 @@ fn compare(
 // counts are chosen so that the Monte Carlo noise of both images together stays well under the 2 %
 // the issue asks for (measured: see the README's renderer table).
 const SIZE: u32 = 32;
-const MIS_SPP: u32 = 2048;
-const REF_SPP: u32 = 4096;
+const MIS_SPP: u32 = 4096;
+const REF_SPP: u32 = 8192;
 
 #[test]
 fn mis_converges_to_the_reference_on_sun_maps() {
@@ -130,7 +134,7 @@ fn mis_converges_to_the_reference_on_sun_maps() {
         let e = env(map);
         for (name, m) in materials() {
             let tag = format!("mis-{map}-{name}");
-            let err = compare(&mut r, &tag, &m, &e, SIZE, MIS_SPP, Estimator::Mis, REF_SPP);
+            let err = compare(0.02, &mut r, &tag, &m, &e, SIZE, MIS_SPP, Estimator::Mis, REF_SPP);
             // The issue's bound: 2 % relative L1 over the object.
             if !(err < 0.02) {
                 failures.push(format!("{tag}: {err:.4}"));
@@ -148,7 +152,7 @@ fn plain_converges_on_low_dynamic_range_maps() {
         let e = env(map);
         for (name, m) in materials() {
             let tag = format!("plain-{map}-{name}");
-            let err = compare(&mut r, &tag, &m, &e, SIZE, PLAIN_SPP, Estimator::Plain, REF_SPP);
+            let err = compare(0.02, &mut r, &tag, &m, &e, SIZE, PLAIN_SPP, Estimator::Plain, REF_SPP);
             // The issue's bound: 2 % relative L1 over the object.
             if !(err < 0.02) {
                 failures.push(format!("{tag}: {err:.4}"));
@@ -171,7 +175,7 @@ fn fis_at_8_spp_is_within_the_measured_error_per_map() {
         let e = env(map);
         for (name, m) in materials() {
             let tag = format!("fis-{map}-{name}");
-            let err = compare(&mut r, &tag, &m, &e, SIZE, 8, Estimator::Fis, REF_SPP);
+            let err = compare(bound, &mut r, &tag, &m, &e, SIZE, 8, Estimator::Fis, REF_SPP);
             if !(err < bound) {
                 failures.push(format!("{tag}: {err:.4} over {bound}"));
             }
@@ -180,7 +184,11 @@ fn fis_at_8_spp_is_within_the_measured_error_per_map() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-const FIS_BOUNDS: [(&str, f64); 4] = [("sky.exr", 0.5), ("studio.exr", 0.5), ("venice.exr", 0.5), ("city.exr", 0.5)];
+// Worst measured per map over the four materials (lavapipe, 32², Halton from index 1): sky 0.49,
+// studio 0.64, venice 0.15, city 0.22; the bounds add a fifth. The error falls with samples (studio,
+// iso-ward: 0.52 at 8 spp, 0.24 at 32, 0.08 at 256), so it is the estimator's, not a bug's.
+const FIS_BOUNDS: [(&str, f64); 4] =
+    [("sky.exr", 0.59), ("studio.exr", 0.77), ("venice.exr", 0.18), ("city.exr", 0.27)];
 
 /// The SH diffuse pass against the exact SH9 irradiance of the map computed on the CPU in f64:
 /// 0.5 % (f32 arithmetic on the GPU is far below that; the bound is the issue's).
