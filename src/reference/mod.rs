@@ -2,7 +2,10 @@
 //! rasterised by casting each pixel-centre ray at the triangles whose screen bounds hold it (so
 //! coverage matches the GPU rasteriser up to ties on edges), then converged by multiple importance
 //! sampling: per iteration one environment sample (CDF inversion over `|L| sin θ`) and one sample of
-//! the material's mixture, balance heuristic. Canvas views are the exact point-lit canvas. Imports
+//! the material's mixture, balance heuristic. Canvas views are the exact point-lit canvas.
+//!
+//! Owns the CPU image type shared with the GPU renderer ([`Image`]), the hit buffer, both reference
+//! images and the image metric [`relative_l1`]; writes no files (output is `imageio`'s) and imports
 //! nothing from `ash`.
 
 use glam::DVec3;
@@ -12,7 +15,7 @@ use crate::brdf::sampling::MaterialSampler;
 use crate::brdf::Material;
 use crate::brush::canvas::{normal_at, Canvas, Frame};
 use crate::rng::{radical_inverse, Pcg32};
-use crate::scene::camera::NEAR;
+use crate::scene::camera::{Rays, NEAR};
 use crate::scene::{Camera, Environment, Mesh};
 
 /// A linear RGBA image, row-major from the top; alpha 1 on the object, 0 on the background.
@@ -41,12 +44,16 @@ pub struct HitBuffer {
 /// Rows per band when binning triangles.
 const BAND: usize = 16;
 
-/// Möller–Trumbore: distance and barycentrics `(b1, b2)` of the hit, if any.
+/// Möller–Trumbore in `f64`: distance and barycentrics `(b1, b2)` of the hit, if any. Edges and
+/// vertices count as inside (a ray through a shared edge hits both triangles at the same distance,
+/// so there are no cracks); a ray within 1e-12 rad of the triangle's plane misses it, and so does a
+/// hit nearer than [`NEAR`] (the GPU's near plane).
 fn intersect(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, f64, f64)> {
     let (e1, e2) = (b - a, c - a);
     let p = d.cross(e2);
     let det = e1.dot(p);
-    if det.abs() < 1e-14 {
+    // |det| = |d · (e1 × e2)|: the sine of the ray's angle with the plane times twice the area.
+    if !(det.abs() > 1e-12 * e1.cross(e2).length()) {
         return None;
     }
     let inv = 1.0 / det;
@@ -64,9 +71,18 @@ fn intersect(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, f
     (t > NEAR).then_some((t, u, v))
 }
 
-/// The first hit of every pixel-centre ray.
+/// The first hit of every pixel-centre ray, row-major from the top. Each triangle is projected to
+/// the screen and binned into bands of 16 rows by its bounding box (the whole image when a vertex is
+/// not in front of the near plane); bands run in parallel, and each pixel centre in a triangle's box
+/// is intersected with it ([`intersect`]), keeping the nearest (the first triangle in index order on
+/// ties). The normal is the barycentric interpolation of the vertex normals, normalised (the
+/// triangle's geometric normal where they cancel).
 pub fn rasterize(mesh: &Mesh, camera: &Camera, width: u32, height: u32) -> HitBuffer {
     let (w, h) = (width as usize, height as usize);
+    if w == 0 || h == 0 {
+        return HitBuffer { width, height, hits: Vec::new() };
+    }
+    let rays = Rays::new(camera, width, height);
     let (right, up, forward) = camera.basis();
     let t = (camera.fov_deg.to_radians() / 2.0).tan();
     let aspect = w as f64 / h as f64;
@@ -113,12 +129,14 @@ pub fn rasterize(mesh: &Mesh, camera: &Camera, width: u32, height: u32) -> HitBu
         .flat_map_iter(|band| {
             let rows = band * BAND..((band + 1) * BAND).min(h);
             let mut out: Vec<Option<(f64, Hit)>> = vec![None; rows.len() * w];
+            let dirs: Vec<DVec3> =
+                rows.clone().flat_map(|j| (0..w).map(move |i| rays.at(i as f64 + 0.5, j as f64 + 0.5))).collect();
             for &(k, [x0, x1, y0, y1]) in &binned[band] {
                 let tri = &mesh.indices[3 * k as usize..3 * k as usize + 3];
                 let (a, b, c) = (pos[tri[0] as usize], pos[tri[1] as usize], pos[tri[2] as usize]);
                 for j in y0.max(rows.start)..y1.min(rows.end) {
                     for i in x0..x1 {
-                        let d = camera.ray(i as f64 + 0.5, j as f64 + 0.5, width, height);
+                        let d = dirs[(j - rows.start) * w + i];
                         let Some((dist, u, v)) = intersect(camera.eye, d, a, b, c) else { continue };
                         let slot = &mut out[(j - rows.start) * w + i];
                         if slot.is_some_and(|s| s.0 <= dist) {
@@ -127,10 +145,8 @@ pub fn rasterize(mesh: &Mesh, camera: &Camera, width: u32, height: u32) -> HitBu
                         let n = (mesh.normals[tri[0] as usize].as_dvec3() * (1.0 - u - v)
                             + mesh.normals[tri[1] as usize].as_dvec3() * u
                             + mesh.normals[tri[2] as usize].as_dvec3() * v)
-                            .normalize_or_zero();
-                        if n == DVec3::ZERO {
-                            continue;
-                        }
+                            .try_normalize()
+                            .unwrap_or_else(|| (b - a).cross(c - a).normalize());
                         *slot = Some((dist, Hit { position: camera.eye + d * dist, normal: n, triangle: k }));
                     }
                 }
@@ -146,9 +162,16 @@ fn sequence(spp: u32) -> Vec<[f64; 5]> {
     (1..=spp as u64).map(|i| [2, 3, 5, 7, 11].map(|b| radical_inverse(i, b))).collect()
 }
 
-/// The converged mesh image: background = the environment seen along each ray (alpha 0); object =
-/// MIS estimate of `∫ f L cos θ` with `spp` iterations of one environment and one BRDF sample, the
-/// sequence Cranley–Patterson rotated per pixel by a PCG stream seeded with the pixel index.
+/// The converged mesh image: background = the environment seen along each ray (alpha 0); object
+/// (alpha 1) = the MIS estimate of `∫ f(ω_i, ω_o) L(ω_i) cos θ_i dω_i`, black where the view is
+/// below the shading horizon. Iteration `s` of `spp` (at least one) takes one environment sample
+/// (Halton bases 2, 3 at index `s + 1`) and one material sample (bases 5, 7, 11), each weighted by
+/// the balance heuristic `f L cos / (p_env + p_brdf)`, both pdfs over solid angle. Each pixel's five
+/// coordinates are Cranley–Patterson rotated by five `next_f64` draws of `Pcg32::new(pixel index,
+/// 0x5eed)` (pixel index `j·W + i`), so the image is deterministic and the same at any thread
+/// count. `L` is [`Environment::lookup`], signed. A non-finite contribution is a bug: it fails a
+/// `debug_assert` and is dropped in release builds. With `progress` an `indicatif` bar counts rows
+/// on stderr.
 #[allow(clippy::too_many_arguments)]
 pub fn render_mesh(
     material: &Material,
@@ -164,6 +187,7 @@ pub fn render_mesh(
     let dist = env.distribution();
     let seq = sequence(spp.max(1));
     let w = width as usize;
+    let rays = Rays::new(camera, width.max(1), height.max(1));
     let bar = progress.then(|| {
         let b = indicatif::ProgressBar::new(height as u64);
         b.set_style(
@@ -180,7 +204,7 @@ pub fn render_mesh(
                     let pixel = j * w + i;
                     match hits.hits[pixel] {
                         None => {
-                            let l = env.lookup(camera.ray(i as f64 + 0.5, j as f64 + 0.5, width, height));
+                            let l = env.lookup(rays.at(i as f64 + 0.5, j as f64 + 0.5));
                             [l.x as f32, l.y as f32, l.z as f32, 0.0]
                         }
                         Some(hit) => {
@@ -234,6 +258,7 @@ fn shade(
                 }
             }
         }
+        // Ward's half-vector sampling takes its first coordinate in (0, 1]: 1 − u, same sequence.
         if let Some(wi) = sampler.sample(u[2], 1.0 - u[3], u[4]) {
             let dir = frame.to_world(wi);
             let (pb, pe) = (sampler.pdf(wi), dist.pdf(dir));
@@ -268,8 +293,13 @@ pub fn render_canvas(material: &Material, canvas: &Canvas, width: u32, height: u
     Image { width, height, pixels }
 }
 
-/// `Σ|a − b| / Σ|b|` over RGB of the pixels both images cover (alpha ≥ ½); `None` when none is.
+/// `Σ|a − b| / Σ|b|` over RGB of the pixels both images cover (alpha ≥ ½); `None` when none is, or
+/// when the sizes differ. Where `b` is black on all of them the result is 0 if `a` is too and
+/// infinite otherwise.
 pub fn relative_l1(a: &Image, b: &Image) -> Option<f64> {
+    if (a.width, a.height) != (b.width, b.height) || a.pixels.len() != b.pixels.len() {
+        return None;
+    }
     let (mut num, mut den, mut n) = (0.0, 0.0, 0usize);
     for (p, q) in a.pixels.iter().zip(&b.pixels) {
         if p[3] >= 0.5 && q[3] >= 0.5 {
@@ -280,5 +310,5 @@ pub fn relative_l1(a: &Image, b: &Image) -> Option<f64> {
             n += 1;
         }
     }
-    (n > 0 && den > 0.0).then(|| num / den)
+    (n > 0).then(|| if num == 0.0 { 0.0 } else { num / den })
 }

@@ -1,6 +1,12 @@
 //! The mesh camera of SPEC §1: perspective, `eye`, `target`, `up`, vertical field of view; pixel
 //! `(i, j)` (column, row from the top) samples the ray through its centre. The same camera gives the
-//! CPU reference its rays and the GPU rasteriser its view-projection matrix, and the two agree.
+//! CPU reference its rays ([`Camera::ray`]) and the GPU rasteriser its view-projection matrix
+//! ([`Camera::view_proj`]), and the two agree (tested in `tests/mesh_camera.rs`).
+//!
+//! Owns the camera's text form (`--camera`) and its geometry; knows nothing of meshes or Vulkan
+//! objects (the matrix is plain `glam`).
+
+use std::fmt;
 
 use glam::{DMat4, DVec3, DVec4, Mat4};
 
@@ -9,6 +15,7 @@ pub struct Camera {
     pub eye: DVec3,
     pub target: DVec3,
     pub up: DVec3,
+    /// Vertical field of view in degrees, in (0, 180).
     pub fov_deg: f64,
 }
 
@@ -19,13 +26,19 @@ impl Default for Camera {
     }
 }
 
-/// Near and far planes of the projection (the scene fits the unit sphere; the eye may come close).
-pub const NEAR: f64 = 1e-3;
-pub const FAR: f64 = 1e3;
+/// The near plane of [`Camera::view_proj`], also the smallest ray distance the CPU reference accepts.
+/// The far plane is at infinity: depth `1 − NEAR/z` never reaches the cleared 1.0, so no part of the
+/// scene is clipped however far the eye is. With `D32_SFLOAT` and the default camera (`z ≈ 4`) the
+/// depth resolution is about `z² · 6e-8 / NEAR ≈ 1e-4` — far below any feature of a mesh scaled to
+/// the unit sphere.
+pub const NEAR: f64 = 0.01;
+
+/// Sine of the smallest angle allowed between `up` and the view direction.
+const MIN_UP_SINE: f64 = 1e-6;
 
 fn parse_vec(key: &str, v: &str) -> Result<DVec3, String> {
-    let parts: Vec<&str> = v.split(',').collect();
-    let nums: Option<Vec<f64>> = parts.iter().map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
+    let nums: Option<Vec<f64>> =
+        v.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
     match nums {
         Some(n) if n.len() == 3 => Ok(DVec3::new(n[0], n[1], n[2])),
         _ => Err(format!("{key}: expected three finite numbers x,y,z, got \"{v}\"")),
@@ -33,38 +46,57 @@ fn parse_vec(key: &str, v: &str) -> Result<DVec3, String> {
 }
 
 impl Camera {
-    /// Parses `"eye=x,y,z target=x,y,z up=x,y,z fov=deg"`: any subset, any order, the rest default.
+    /// Parses `"eye=x,y,z target=x,y,z up=x,y,z fov=deg"`: any subset, any order, separated by
+    /// whitespace; the keys not given keep their defaults. Every refusal names the key (or the item)
+    /// and what is wrong: an item without `=`, an unknown or repeated key, a value that is not three
+    /// finite numbers (one for `fov`), and the geometric refusals of [`Camera::check`].
     pub fn parse(s: &str) -> Result<Camera, String> {
         let mut c = Camera::default();
+        let mut seen: Vec<&str> = Vec::new();
         for item in s.split_whitespace() {
-            let (key, value) = item.split_once('=').ok_or_else(|| format!("\"{item}\" is not key=value"))?;
+            let (key, value) =
+                item.split_once('=').ok_or_else(|| format!("\"{item}\" is not key=value (eye, target, up, fov)"))?;
+            if seen.contains(&key) {
+                return Err(format!("{key}: given twice"));
+            }
             match key {
                 "eye" => c.eye = parse_vec(key, value)?,
                 "target" => c.target = parse_vec(key, value)?,
                 "up" => c.up = parse_vec(key, value)?,
                 "fov" => {
                     c.fov_deg = value
+                        .trim()
                         .parse::<f64>()
                         .ok()
                         .filter(|f| f.is_finite())
-                        .ok_or_else(|| format!("fov: \"{value}\" is not a number"))?
+                        .ok_or_else(|| format!("fov: \"{value}\" is not a number of degrees"))?
                 }
                 _ => return Err(format!("unknown key \"{key}\" (eye, target, up, fov)")),
             }
+            seen.push(key);
         }
         c.check()?;
         Ok(c)
     }
 
-    /// Refuses a camera without a view direction, with `up` along it, or with a field of view
-    /// outside (0°, 180°).
+    /// Refuses a camera without a view direction (`eye` = `target`), with `up` zero or parallel to
+    /// the view direction (within 1e-6 rad), a non-finite coordinate, or a field of view outside
+    /// (0°, 180°).
     pub fn check(&self) -> Result<(), String> {
-        let f = self.target - self.eye;
-        if !(f.length() > 1e-12) {
-            return Err("eye and target are the same point".into());
+        for (key, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if !v.is_finite() {
+                return Err(format!("{key}: {v} is not finite"));
+            }
         }
-        if !(f.normalize().cross(self.up).length() > 1e-9) {
-            return Err("up is zero or parallel to the view direction".into());
+        let Some(f) = (self.target - self.eye).try_normalize() else {
+            return Err(format!("eye and target are the same point {}", self.eye));
+        };
+        match self.up.try_normalize() {
+            None => return Err("up: must not be zero".into()),
+            Some(u) if !(f.cross(u).length() > MIN_UP_SINE) => {
+                return Err(format!("up: {} is parallel to the view direction {f}", self.up))
+            }
+            Some(_) => {}
         }
         if !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
             return Err(format!("fov: {} is not between 0 and 180 degrees", self.fov_deg));
@@ -72,46 +104,80 @@ impl Camera {
         Ok(())
     }
 
-    /// The orthonormal basis (right, up, forward).
+    /// The orthonormal basis (right, up, forward) of a camera that passes [`Camera::check`]; `up` is
+    /// made orthogonal to the view direction.
     pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let forward = (self.target - self.eye).normalize();
         let right = forward.cross(self.up).normalize();
         (right, right.cross(forward), forward)
     }
 
-    /// The unit direction through image point `(px, py)` in pixels (pixel `(i, j)`'s centre is
-    /// `(i + 0.5, j + 0.5)`, rows from the top).
-    pub fn ray(&self, px: f64, py: f64, width: u32, height: u32) -> DVec3 {
-        let (right, up, forward) = self.basis();
+    /// `tan(fov/2)` times the aspect ratio and `tan(fov/2)`: the half extents of the image plane at
+    /// distance 1.
+    fn half_extents(&self, width: u32, height: u32) -> (f64, f64) {
         let t = (self.fov_deg.to_radians() / 2.0).tan();
-        let aspect = width as f64 / height as f64;
-        let x = (2.0 * px / width as f64 - 1.0) * t * aspect;
-        let y = (2.0 * py / height as f64 - 1.0) * t;
-        (forward + x * right - y * up).normalize()
+        (t * width as f64 / height as f64, t)
+    }
+
+    /// The unit direction through image point `(px, py)` in pixels (pixel `(i, j)`'s centre is
+    /// `(i + 0.5, j + 0.5)`, rows from the top): vertical field of view, aspect `width/height`.
+    pub fn ray(&self, px: f64, py: f64, width: u32, height: u32) -> DVec3 {
+        Rays::new(self, width, height).at(px, py)
     }
 
     /// The view-projection for Vulkan: clip `y` points down the image (NDC `y = −1` is the top row),
-    /// depth in `[0, 1]` between [`NEAR`] and [`FAR`]. A point `eye + s·ray(px, py)` lands at NDC
-    /// `(2px/W − 1, 2py/H − 1)`.
+    /// depth `1 − NEAR/z` in `[0, 1)` for view depth `z ≥` [`NEAR`] (infinite far plane, compare
+    /// `LESS`, clear to 1). A point `eye + s·ray(px, py)` lands at NDC `(2px/W − 1, 2py/H − 1)`.
     pub fn view_proj(&self, width: u32, height: u32) -> Mat4 {
         let (right, up, forward) = self.basis();
-        // View space: x right, y down, z forward.
+        // View space: x right, y down the image, z forward (depth).
         let view = DMat4::from_cols(
             DVec4::new(right.x, -up.x, forward.x, 0.0),
             DVec4::new(right.y, -up.y, forward.y, 0.0),
             DVec4::new(right.z, -up.z, forward.z, 0.0),
             DVec4::new(-right.dot(self.eye), up.dot(self.eye), -forward.dot(self.eye), 1.0),
         );
-        let t = (self.fov_deg.to_radians() / 2.0).tan();
-        let aspect = width as f64 / height as f64;
-        let (sx, sy) = (1.0 / (t * aspect), 1.0 / t);
-        let a = FAR / (FAR - NEAR);
+        let (tx, ty) = self.half_extents(width, height);
         let proj = DMat4::from_cols(
-            DVec4::new(sx, 0.0, 0.0, 0.0),
-            DVec4::new(0.0, sy, 0.0, 0.0),
-            DVec4::new(0.0, 0.0, a, 1.0),
-            DVec4::new(0.0, 0.0, -NEAR * a, 0.0),
+            DVec4::new(1.0 / tx, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, 1.0 / ty, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, 1.0, 1.0),
+            DVec4::new(0.0, 0.0, -NEAR, 0.0),
         );
         (proj * view).as_mat4()
+    }
+}
+
+/// The camera's rays for one image size with the basis computed once: what [`Camera::ray`] computes,
+/// for renderers that need a ray per pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct Rays {
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
+    sx: f64,
+    sy: f64,
+}
+
+impl Rays {
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Rays {
+        let (right, up, forward) = camera.basis();
+        let (tx, ty) = camera.half_extents(width, height);
+        Rays { right: right * tx, up: up * ty, forward, sx: 2.0 / width as f64, sy: 2.0 / height as f64 }
+    }
+
+    /// The unit direction through image point `(px, py)` in pixels.
+    pub fn at(&self, px: f64, py: f64) -> DVec3 {
+        let (x, y) = (px * self.sx - 1.0, py * self.sy - 1.0);
+        (self.forward + x * self.right - y * self.up).normalize()
+    }
+}
+
+impl fmt::Display for Camera {
+    /// The form [`Camera::parse`] reads, every key given; `{}` of an `f64` is its shortest exact
+    /// decimal, so `parse(&c.to_string()) == Ok(c)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = |d: DVec3| format!("{},{},{}", d.x, d.y, d.z);
+        write!(f, "eye={} target={} up={} fov={}", v(self.eye), v(self.target), v(self.up), self.fov_deg)
     }
 }
