@@ -14,6 +14,7 @@ pub mod brush;
 pub mod error;
 pub mod fsio;
 pub mod imageio;
+pub mod measure;
 pub mod reference;
 pub mod render;
 pub mod rng;

@@ -5,6 +5,7 @@ mod check;
 mod demo;
 mod devices;
 mod eval;
+mod measure;
 mod paint;
 mod reference;
 mod render;
@@ -65,6 +66,18 @@ enum Command {
     Render(scene::SceneArgs),
     /// The same image on the CPU, converged (ground truth).
     Reference(scene::SceneArgs),
+    /// GPU ms per pass against lobe count, resolution, triangle count, samples; vec4 against scalar.
+    Bench {
+        /// The small CI setting.
+        #[arg(long)]
+        quick: bool,
+        /// Also write the measurements as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Measurement reports: error-vs-time, stability.
+    #[command(subcommand)]
+    Report(Report),
     /// The Vulkan devices the renderer can use, and the one it picks.
     Devices,
     /// The headless main job: paint the embedded default strokes onto the scratch material, write the
@@ -72,6 +85,26 @@ enum Command {
     Demo {
         #[arg(long, default_value = "brdf-shop-demo")]
         out: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum Report {
+    /// Error against GPU time per estimator and sample count: CSV, log–log plot, Markdown summary.
+    ErrorVsTime {
+        #[arg(long)]
+        quick: bool,
+        /// Folder for error-vs-time.{csv,png,md} and the reference cache.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// NaN/Inf counts, GPU f32 against CPU f64 and maximum albedo over stiff and extreme inputs.
+    Stability {
+        #[arg(long)]
+        quick: bool,
+        /// Also write the table (Markdown).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -106,6 +139,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),
+        Some(Command::Bench { quick, json }) => measure::bench(quick, json.as_deref()),
+        Some(Command::Report(Report::ErrorVsTime { quick, out })) => measure::error_vs_time(quick, &out),
+        Some(Command::Report(Report::Stability { quick, out })) => measure::stability(quick, out.as_deref()),
         Some(Command::Reference(args)) => reference::run(&args),
         Some(Command::Eval { material }) => eval::run(&material),
         Some(Command::Paint { strokes, material, out }) => paint::run(&strokes, material.as_deref(), &out),

@@ -74,7 +74,7 @@ fn intersect(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<(f64, f
 /// The first hit of every pixel-centre ray, row-major from the top. Each triangle is projected to
 /// the screen and binned into bands of 16 rows by its bounding box (the whole image when a vertex is
 /// not in front of the near plane); bands run in parallel, and each pixel centre in a triangle's box
-/// is intersected with it ([`intersect`]), keeping the nearest (the first triangle in index order on
+/// is intersected with it (`intersect`), keeping the nearest (the first triangle in index order on
 /// ties). The normal is the barycentric interpolation of the vertex normals, normalised (the
 /// triangle's geometric normal where they cancel).
 pub fn rasterize(mesh: &Mesh, camera: &Camera, width: u32, height: u32) -> HitBuffer {

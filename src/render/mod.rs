@@ -12,6 +12,7 @@ pub mod background;
 pub mod canvas;
 pub mod diffuse;
 pub mod environment;
+pub mod eval;
 pub mod gbuffer;
 pub mod gpu;
 pub mod lobe;
@@ -141,6 +142,7 @@ struct Passes {
     lobe: lobe::LobePass,
     mis: mis::MisPass,
     canvas: canvas::CanvasPass,
+    eval: eval::EvalPass,
 }
 
 impl Passes {
@@ -152,6 +154,7 @@ impl Passes {
             lobe: lobe::LobePass::new(),
             mis: mis::MisPass::new(ctx)?,
             canvas: canvas::CanvasPass::new(ctx)?,
+            eval: eval::EvalPass::new(ctx)?,
         })
     }
 
@@ -162,11 +165,14 @@ impl Passes {
         self.lobe.destroy(ctx);
         self.mis.destroy(ctx);
         self.canvas.destroy(ctx);
+        self.eval.destroy(ctx);
     }
 }
 
 /// Owns the context and every GPU object of the renderer; dropped passes first, context last.
 pub struct Renderer {
+    /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
+    pub scalar_lobes: bool,
     passes: Option<Passes>,
     env: Option<GpuEnvironment>,
     mesh: Option<GpuMesh>,
@@ -192,7 +198,16 @@ fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
 impl Renderer {
     pub fn new(ctx: Context) -> Result<Renderer> {
         let passes = Passes::new(&ctx)?;
-        Ok(Renderer { passes: Some(passes), env: None, mesh: None, targets: None, halton: None, sequence: None, ctx })
+        Ok(Renderer {
+            scalar_lobes: false,
+            passes: Some(passes),
+            env: None,
+            mesh: None,
+            targets: None,
+            halton: None,
+            sequence: None,
+            ctx,
+        })
     }
 
     pub fn device_name(&self) -> &str {
@@ -274,6 +289,13 @@ impl Renderer {
         Ok(())
     }
 
+    /// `f(ω_i, ω_o)` in `f32` on the GPU for each pair (local frame), checked for validation errors.
+    pub fn eval(&self, material: &Material, pairs: &[(DVec3, DVec3)]) -> Result<Vec<[f32; 3]>> {
+        let out = self.passes.as_ref().expect("passes live until drop").eval.run(&self.ctx, material, pairs)?;
+        self.ctx.check_validation()?;
+        Ok(out)
+    }
+
     /// Renders one frame of `material` as `settings` say.
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
@@ -295,7 +317,9 @@ impl Renderer {
             .iter()
             .enumerate()
             .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
-            .map(|(i, l)| (i as u32, lobe::Variant::of(material, l, prefilter)))
+            .map(|(i, l)| {
+                (i as u32, lobe::Variant { vec4: !self.scalar_lobes, ..lobe::Variant::of(material, l, prefilter) })
+            })
             .collect();
         if mesh_view {
             self.buffers_for(settings.spp, settings.estimator)?;

@@ -37,8 +37,7 @@ pub const NEAR: f64 = 0.01;
 const MIN_UP_SINE: f64 = 1e-6;
 
 fn parse_vec(key: &str, v: &str) -> Result<DVec3, String> {
-    let nums: Option<Vec<f64>> =
-        v.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
+    let nums: Option<Vec<f64>> = v.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
     match nums {
         Some(n) if n.len() == 3 => Ok(DVec3::new(n[0], n[1], n[2])),
         _ => Err(format!("{key}: expected three finite numbers x,y,z, got \"{v}\"")),

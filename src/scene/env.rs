@@ -84,6 +84,12 @@ impl Environment {
         Environment::from_texels(w, h, texels, &origin)
     }
 
+    /// An EXR held in memory (the embedded default).
+    pub fn from_exr_bytes(bytes: &[u8], origin: &str) -> Result<Environment> {
+        let (w, h, texels) = read_exr(bytes, origin)?;
+        Environment::from_texels(w, h, texels, origin)
+    }
+
     /// Applies the texel policy and computes the statistics.
     pub fn from_texels(width: usize, height: usize, mut texels: Vec<[f32; 3]>, origin: &str) -> Result<Environment> {
         if width == 0 || height == 0 {

@@ -26,7 +26,13 @@ impl Mesh {
     /// `(Δφ² + Δθ²)/8 = 1.5e-4` (Δ = 2π/256 = π/128), which at 1024² with the default camera (radius
     /// about 495 px) is under 0.08 px; the silhouette, along edges, deviates by `Δ²/8`: under 0.04 px.
     pub fn sphere() -> Mesh {
-        let (seg, rings) = (256u32, 128u32);
+        Mesh { name: "sphere".into(), ..Mesh::uv_sphere(256, 128) }
+    }
+
+    /// A unit UV sphere with `seg` segments around and `rings` from pole to pole (at least 3 and 2):
+    /// `2·seg·(rings − 1)` triangles. The benchmark's meshes of 1 k … 1 M triangles.
+    pub fn uv_sphere(seg: u32, rings: u32) -> Mesh {
+        let (seg, rings) = (seg.max(3), rings.max(2));
         let mut positions = Vec::new();
         for r in 0..=rings {
             let theta = std::f32::consts::PI * r as f32 / rings as f32;
@@ -49,7 +55,7 @@ impl Mesh {
             })
             .flat_map(|(_, tri)| tri.iter().copied())
             .collect();
-        Mesh { name: "sphere".into(), positions, normals, indices }
+        Mesh { name: format!("sphere-{seg}x{rings}"), positions, normals, indices }
     }
 
     /// The paper's Figure 2 torus: ring in the `xz` plane (axis `y`), major radius 0.7, minor 0.3.
@@ -108,10 +114,11 @@ impl Mesh {
             let mesh = &m.mesh;
             let base = positions.len();
             let n = mesh.positions.len() / 3;
-            for (i, c) in mesh.positions.chunks_exact(3).enumerate() {
+            for c in mesh.positions.chunks_exact(3) {
                 let p = Vec3::new(c[0], c[1], c[2]);
                 if !p.is_finite() {
-                    let what = format!("object \"{}\": vertex {} has a non-finite coordinate {p}", m.name, i + 1);
+                    // tobj renumbers vertices in `single_index` mode: the coordinates identify it.
+                    let what = format!("a vertex has a non-finite coordinate: v {} {} {}", c[0], c[1], c[2]);
                     return Err(Error::input(&origin, what));
                 }
                 positions.push(p);
@@ -122,11 +129,11 @@ impl Mesh {
                 all_have_normals = false;
             }
             if mesh.indices.len() % 3 != 0 {
-                return Err(Error::input(&origin, format!("object \"{}\": faces did not triangulate", m.name)));
+                return Err(Error::input(&origin, "faces did not triangulate"));
             }
             for &i in &mesh.indices {
                 if i as usize >= n {
-                    let what = format!("object \"{}\": a face uses vertex {} of {n}", m.name, i as u64 + 1);
+                    let what = format!("a face uses vertex {} of {n}", i as u64 + 1);
                     return Err(Error::input(&origin, what));
                 }
                 let global =

@@ -1,0 +1,54 @@
+//! `brdf-shop bench` and `brdf-shop report {error-vs-time, stability}` (issue: measurements): thin
+//! front ends over `brdf_shop::measure`, each with a `--quick` setting the tests run.
+
+use std::path::Path;
+
+use anyhow::Context as _;
+use brdf_shop::measure::{bench, error_vs_time, stability};
+use brdf_shop::render::Renderer;
+use brdf_shop::vk::Context;
+
+fn renderer() -> anyhow::Result<Renderer> {
+    Ok(Renderer::new(Context::from_env()?)?)
+}
+
+pub fn bench(quick: bool, json: Option<&Path>) -> anyhow::Result<()> {
+    let mut r = renderer()?;
+    let plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
+    let rows = bench::run(&mut r, &plan, true)?;
+    print!("{}", bench::table(&rows, r.device_name()));
+    if let Some(path) = json {
+        let text =
+            serde_json::to_string_pretty(&bench::json(&rows, r.device_name(), &plan)).context("encoding JSON")? + "\n";
+        brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+pub fn error_vs_time(quick: bool, out: &Path) -> anyhow::Result<()> {
+    let mut r = renderer()?;
+    let plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
+    let (rows, files) = error_vs_time::report(&mut r, &plan, out, true)?;
+    print!("{}", error_vs_time::summary(&rows, &plan, r.device_name()));
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
+pub fn stability(quick: bool, out: Option<&Path>) -> anyhow::Result<()> {
+    let mut r = renderer()?;
+    let cases = stability::run(&mut r, quick)?;
+    let text = stability::table(&cases, r.device_name());
+    print!("{text}");
+    if let Some(path) = out {
+        brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    let bad: Vec<&str> = cases.iter().filter(|c| c.non_finite > 0).map(|c| c.name.as_str()).collect();
+    if !bad.is_empty() {
+        anyhow::bail!("non-finite values in: {}", bad.join(", "));
+    }
+    Ok(())
+}

@@ -1,0 +1,354 @@
+//! `report error-vs-time`: for scenes (environment × material) and sample counts, each estimator's
+//! GPU time (timestamps, median of repeated frames; the shading passes, without the G-buffer and
+//! background that every estimator shares) and its error against the converged CPU reference
+//! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
+//! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
+//! (log–log) and `error-vs-time.md` (equal-error speed-ups and the `fis` bias floor).
+
+use std::path::{Path, PathBuf};
+
+use crate::brdf::Material;
+use crate::error::{Error, Result};
+use crate::fsio::write_atomic;
+use crate::reference::{self, Image};
+use crate::render::{environment, Estimator, Renderer, Settings, View};
+use crate::scene::{Camera, Environment, Mesh};
+
+use super::plot::{loglog_png, Series};
+
+/// What a run covers.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub envs: Vec<&'static str>,
+    pub materials: Vec<&'static str>,
+    pub spps: Vec<u32>,
+    pub size: u32,
+    pub reference_spp: u32,
+    pub repeats: usize,
+}
+
+impl Plan {
+    /// The full sweep: four maps, every report material, 1 … 256 samples, 64², reference at 4096.
+    pub fn full() -> Plan {
+        Plan {
+            envs: vec!["sky.exr", "studio.exr", "venice.exr", "city.exr"],
+            materials: super::report_materials().iter().map(|m| m.0).collect(),
+            spps: vec![1, 2, 4, 8, 16, 32, 64, 128, 256],
+            size: 64,
+            reference_spp: 4096,
+            repeats: 5,
+        }
+    }
+
+    /// What CI runs: two maps, sharp, medium and rough lobes, five sample counts, 32².
+    pub fn quick() -> Plan {
+        Plan {
+            envs: vec!["studio.exr", "venice.exr"],
+            materials: vec!["sharp-ward", "medium-gm", "rough-gm"],
+            spps: vec![1, 4, 8, 32, 128],
+            size: 32,
+            reference_spp: 2048,
+            repeats: 3,
+        }
+    }
+}
+
+/// One row of the CSV.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub env: String,
+    pub material: String,
+    pub estimator: Estimator,
+    pub spp: u32,
+    pub ms_median: f64,
+    pub ms_min: f64,
+    pub ms_max: f64,
+    pub rel_l1: f64,
+    pub rmse: f64,
+    pub max_abs: f64,
+}
+
+impl Row {
+    pub fn scene(&self) -> String {
+        format!("{}/{}", self.env, self.material)
+    }
+}
+
+/// Relative L1, RMSE and maximum absolute error over the pixels both images cover.
+pub fn errors(a: &Image, b: &Image) -> (f64, f64, f64) {
+    let rel = reference::relative_l1(a, b).unwrap_or(f64::NAN);
+    let (mut sq, mut max, mut n) = (0.0, 0.0f64, 0usize);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        if p[3] >= 0.5 && q[3] >= 0.5 {
+            for c in 0..3 {
+                let d = (p[c] as f64 - q[c] as f64).abs();
+                sq += d * d;
+                max = max.max(d);
+                n += 1;
+            }
+        }
+    }
+    (rel, if n > 0 { (sq / n as f64).sqrt() } else { f64::NAN }, max)
+}
+
+fn fnv(h: &mut u64, bytes: &[u8]) {
+    for b in bytes {
+        *h = (*h ^ *b as u64).wrapping_mul(0x100000001b3);
+    }
+}
+
+/// The cache key of a reference image.
+pub fn reference_key(m: &Material, env: &Environment, mesh: &Mesh, camera: &Camera, size: u32, spp: u32) -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    fnv(&mut h, b"brdf-shop reference v1");
+    fnv(&mut h, m.to_json().as_bytes());
+    fnv(&mut h, format!("{:?}", environment::key(env)).as_bytes());
+    fnv(
+        &mut h,
+        format!("{} {} {} {:?} {size} {spp}", mesh.name, mesh.positions.len(), mesh.indices.len(), camera).as_bytes(),
+    );
+    format!("{h:016x}")
+}
+
+const MAGIC: &[u8; 8] = b"BRDFREF1";
+
+fn save_image(path: &Path, im: &Image) -> Result<()> {
+    let mut bytes = MAGIC.to_vec();
+    bytes.extend_from_slice(&im.width.to_le_bytes());
+    bytes.extend_from_slice(&im.height.to_le_bytes());
+    for p in &im.pixels {
+        for v in p {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    write_atomic(path, &bytes)
+}
+
+fn load_image(path: &Path) -> Option<Image> {
+    let bytes = std::fs::read(path).ok()?;
+    if bytes.len() < 16 || &bytes[..8] != MAGIC {
+        return None;
+    }
+    let w = u32::from_le_bytes(bytes[8..12].try_into().ok()?);
+    let h = u32::from_le_bytes(bytes[12..16].try_into().ok()?);
+    let body = &bytes[16..];
+    if body.len() != w as usize * h as usize * 16 {
+        return None;
+    }
+    let f: Vec<f32> = body.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    Some(Image { width: w, height: h, pixels: f.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect() })
+}
+
+/// The reference for a scene, from the cache in `cache` or computed (and cached).
+pub fn cached_reference(
+    cache: &Path,
+    m: &Material,
+    env: &Environment,
+    mesh: &Mesh,
+    camera: &Camera,
+    size: u32,
+    spp: u32,
+) -> Result<Image> {
+    let path = cache.join(format!("ref-{}.bin", reference_key(m, env, mesh, camera, size, spp)));
+    if let Some(im) = load_image(&path) {
+        if im.width == size && im.height == size {
+            return Ok(im);
+        }
+    }
+    let im = reference::render_mesh(m, env, mesh, camera, size, size, spp, false);
+    std::fs::create_dir_all(cache).map_err(|e| Error::io(cache, e))?;
+    save_image(&path, &im)?;
+    Ok(im)
+}
+
+/// Runs the plan; `progress` shows a bar over the scenes.
+pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<Vec<Row>> {
+    let cache = out.join("cache");
+    let mesh = Mesh::sphere();
+    renderer.set_mesh(&mesh)?;
+    let camera = Camera::default();
+    let all = super::report_materials();
+    let bar = progress.then(|| {
+        let b = indicatif::ProgressBar::new((plan.envs.len() * plan.materials.len()) as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("error-vs-time {bar:40} {pos}/{len} scenes, {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let mut rows = Vec::new();
+    for env_name in &plan.envs {
+        let env = super::environment(env_name)?;
+        renderer.set_environment(&env)?;
+        for mat_name in &plan.materials {
+            let Some((_, m)) = all.iter().find(|(n, _)| n == mat_name) else {
+                return Err(Error::input("error-vs-time", format!("unknown material {mat_name}")));
+            };
+            if let Some(b) = &bar {
+                b.set_message(format!("{env_name}/{mat_name}"));
+            }
+            let reference = cached_reference(&cache, m, &env, &mesh, &camera, plan.size, plan.reference_spp)?;
+            for estimator in [Estimator::Fis, Estimator::Plain, Estimator::Mis] {
+                for &spp in &plan.spps {
+                    let s = Settings {
+                        width: plan.size,
+                        height: plan.size,
+                        spp,
+                        estimator,
+                        view: View::Mesh,
+                        camera: camera.clone(),
+                        light: glam::DVec3::Z,
+                        intensity: 1.0,
+                    };
+                    let mut times = Vec::new();
+                    // One frame first, not counted: drivers compile pipelines on first use.
+                    let mut image = Some(renderer.render(m, &s)?.image);
+                    for _ in 0..plan.repeats.max(1) {
+                        let frame = renderer.render(m, &s)?;
+                        times.push(
+                            frame
+                                .timings
+                                .iter()
+                                .filter(|t| t.name != "gbuffer" && t.name != "background")
+                                .map(|t| t.ms)
+                                .sum(),
+                        );
+                        image = Some(frame.image);
+                    }
+                    let image = image.expect("at least one frame");
+                    let (rel_l1, rmse, max_abs) = errors(&image, &reference);
+                    let (ms_median, ms_min, ms_max) = super::stats(&times);
+                    rows.push(Row {
+                        env: env_name.to_string(),
+                        material: mat_name.to_string(),
+                        estimator,
+                        spp,
+                        ms_median,
+                        ms_min,
+                        ms_max,
+                        rel_l1,
+                        rmse,
+                        max_abs,
+                    });
+                }
+            }
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Ok(rows)
+}
+
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from("env,material,estimator,spp,gpu_ms_median,gpu_ms_min,gpu_ms_max,rel_l1,rmse,max_abs\n");
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6}\n",
+            r.env,
+            r.material,
+            r.estimator.name(),
+            r.spp,
+            r.ms_median,
+            r.ms_min,
+            r.ms_max,
+            r.rel_l1,
+            r.rmse,
+            r.max_abs
+        ));
+    }
+    s
+}
+
+/// Where along a measured curve `(spp, ms, error)` the error first reaches `target`, interpolated
+/// log–log between measured points: `(spp, ms)`, or `None` when it never does.
+pub fn reach(curve: &[(u32, f64, f64)], target: f64) -> Option<(f64, f64)> {
+    for (k, &(spp, ms, e)) in curve.iter().enumerate() {
+        if e <= target {
+            if k == 0 {
+                return Some((spp as f64, ms));
+            }
+            let (s0, m0, e0) = curve[k - 1];
+            let t = if e0 > e { (e0.ln() - target.ln()) / (e0.ln() - e.ln()) } else { 1.0 };
+            let lerp = |a: f64, b: f64| (a.ln() + t * (b.ln() - a.ln())).exp();
+            return Some((lerp(s0 as f64, spp as f64), lerp(m0.max(1e-9), ms.max(1e-9))));
+        }
+    }
+    None
+}
+
+fn curve(rows: &[Row], scene: &str, estimator: Estimator) -> Vec<(u32, f64, f64)> {
+    let mut c: Vec<_> = rows
+        .iter()
+        .filter(|r| r.scene() == scene && r.estimator == estimator)
+        .map(|r| (r.spp, r.ms_median, r.rel_l1))
+        .collect();
+    c.sort_by_key(|p| p.0);
+    c
+}
+
+/// The Markdown summary: per scene, `fis` at 8 spp, what `plain` and `mis` need to match it, and
+/// where `fis` stops improving.
+pub fn summary(rows: &[Row], plan: &Plan, device: &str) -> String {
+    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
+    scenes.dedup();
+    let mut s = format!(
+        "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
+         Error: relative L1 over the object. GPU ms: shading passes only (median of {2} frames).\n\n",
+        plan.size, plan.reference_spp, plan.repeats
+    );
+    s.push_str("| scene | fis 8 spp: error, ms | plain to match: spp, ms, speed-up | mis to match: spp, ms, speed-up | fis floor: error (from spp) |\n");
+    s.push_str("| --- | --- | --- | --- | --- |\n");
+    for scene in &scenes {
+        let fis = curve(rows, scene, Estimator::Fis);
+        let Some(&(_, fms, fe)) = fis.iter().find(|p| p.0 == 8).or(fis.last()) else { continue };
+        let matched = |e: Estimator| match reach(&curve(rows, scene, e), fe) {
+            Some((spp, ms)) => format!("{spp:.0}, {ms:.2}, {:.1}×", ms / fms.max(1e-9)),
+            None => format!("not within {} spp", plan.spps.last().copied().unwrap_or(0)),
+        };
+        let floor = fis.iter().map(|p| p.2).fold(f64::MAX, f64::min);
+        let from = fis.iter().find(|p| p.2 <= floor * 1.05).map_or(0, |p| p.0);
+        s.push_str(&format!(
+            "| {scene} | {fe:.4}, {fms:.2} | {} | {} | {floor:.4} ({from}) |\n",
+            matched(Estimator::Plain),
+            matched(Estimator::Mis)
+        ));
+    }
+    s.push_str("\n`speed-up` is the matching estimator's GPU ms over fis's at 8 spp (how many times longer it runs for the same error). The fis floor is its smallest error over the sweep and the first sample count within 5 % of it: prefiltering trades noise for a bias that more samples do not remove.\n");
+    s
+}
+
+/// The log–log plot: one line per scene and estimator, coloured by estimator.
+pub fn plot(rows: &[Row], device: &str) -> Result<Vec<u8>> {
+    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
+    scenes.dedup();
+    let mut series = Vec::new();
+    for scene in &scenes {
+        for (k, e) in [Estimator::Fis, Estimator::Plain, Estimator::Mis].into_iter().enumerate() {
+            let points = curve(rows, scene, e).into_iter().map(|(_, ms, err)| (ms, err)).collect();
+            series.push(Series { label: e.name().to_string(), colour: k, points });
+        }
+    }
+    loglog_png(
+        &format!("error against GPU time ({device})"),
+        "GPU ms (shading passes)",
+        "relative L1 error",
+        &series,
+        (1100, 760),
+    )
+}
+
+/// Runs, writes CSV, plot and summary into `out`; returns the rows.
+pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Vec<PathBuf>)> {
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let rows = run(renderer, plan, out, progress)?;
+    let device = renderer.device_name().to_string();
+    let files = vec![out.join("error-vs-time.csv"), out.join("error-vs-time.png"), out.join("error-vs-time.md")];
+    write_atomic(&files[0], csv(&rows).as_bytes())?;
+    write_atomic(&files[1], &plot(&rows, &device)?)?;
+    write_atomic(&files[2], summary(&rows, plan, &device).as_bytes())?;
+    Ok((rows, files))
+}

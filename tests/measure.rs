@@ -1,0 +1,139 @@
+//! The measurement commands at their CI size (`--quick`) on this machine's Vulkan device (lavapipe in
+//! CI), through the library and once each through the binary. They assert what must hold whatever
+//! the machine's speed: which passes run, what scales with what, error trends, and zero NaN/Inf.
+
+use brdf_shop::measure::{bench, error_vs_time, stability};
+use brdf_shop::render::{Estimator, Renderer};
+use brdf_shop::vk::Context;
+
+fn renderer() -> Renderer {
+    Renderer::new(Context::new(true, None).expect("a Vulkan 1.3 device with validation (tools/setup)"))
+        .expect("renderer")
+}
+
+/// What a scene does not need costs nothing: a zero-albedo lobe gets no pass, a diffuse-free
+/// material no diffuse pass; and the lobe passes shade from the G-buffer, so their time does not
+/// follow the triangle count (1 k against 100 k triangles of the same sphere: the G-buffer pass grows,
+/// the lobe passes stay within a factor 1.5 — a bound on noise, not a speed target; medians of 3).
+#[test]
+fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
+    let mut r = renderer();
+    let rows = bench::run(&mut r, &bench::Plan::quick(), false).expect("bench");
+    let zero = rows.iter().find(|m| m.label == "0 lobes").expect("0 lobes");
+    assert!(zero.passes.iter().all(|p| !p.0.starts_with("lobe")), "{:?}", zero.passes);
+    let four = rows.iter().find(|m| m.label == "4 lobes").expect("4 lobes");
+    assert_eq!(four.passes.iter().filter(|p| p.0.starts_with("lobe")).count(), 4);
+    let tri: Vec<_> = rows.iter().filter(|m| m.group == "triangles").collect();
+    assert_eq!(tri.len(), 2);
+    let (few, many) = (tri[0], tri[1]);
+    assert!(many.triangles > 50 * few.triangles);
+    let ratio = many.ms("lobe") / few.ms("lobe");
+    eprintln!(
+        "lobe passes: {:.3} ms at {} triangles, {:.3} ms at {} (ratio {ratio:.2}); gbuffer {:.3} → {:.3} ms",
+        few.ms("lobe"),
+        few.triangles,
+        many.ms("lobe"),
+        many.triangles,
+        few.ms("gbuffer"),
+        many.ms("gbuffer")
+    );
+    assert!(ratio < 1.5, "lobe passes grew with the triangle count: ×{ratio:.2}");
+    // The scalar baseline runs the same passes.
+    let names = |label: &str| -> Vec<String> {
+        rows.iter()
+            .find(|m| m.label == label)
+            .unwrap()
+            .passes
+            .iter()
+            .map(|p| p.0.replace(",scalar", "").replace("[scalar]", "[]"))
+            .collect()
+    };
+    assert_eq!(names("vec4"), names("scalar"));
+    let text = bench::table(&rows, "test");
+    assert!(text.lines().count() > rows.len(), "{text}");
+}
+
+/// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
+/// below a third of the error at one sample per pixel — QMC on these scenes falls faster than
+/// 1/√N, which would give 1/√128 ≈ 0.09); on the sun map, `fis` at 8 spp beats `plain` at 8 spp on
+/// the medium and rough lobes. Also writes and checks the CSV, plot and summary.
+#[test]
+fn error_vs_time_quick_trends() {
+    let mut r = renderer();
+    let dir = tempfile::TempDir::new().unwrap();
+    let plan = error_vs_time::Plan::quick();
+    let (rows, files) = error_vs_time::report(&mut r, &plan, dir.path(), false).expect("report");
+    for f in &files {
+        assert!(std::fs::metadata(f).map(|m| m.len() > 100).unwrap_or(false), "{} missing or empty", f.display());
+    }
+    let csv = std::fs::read_to_string(&files[0]).unwrap();
+    assert_eq!(csv.lines().count(), 1 + plan.envs.len() * plan.materials.len() * 3 * plan.spps.len());
+    let png = image::open(&files[1]).expect("the plot is a PNG");
+    assert!(png.width() > 500 && png.height() > 400);
+    let err = |env: &str, mat: &str, e: Estimator, spp: u32| {
+        rows.iter()
+            .find(|r| r.env == env && r.material == mat && r.estimator == e && r.spp == spp)
+            .unwrap_or_else(|| panic!("{env} {mat} {e:?} {spp}"))
+            .rel_l1
+    };
+    let (first, last) = (plan.spps[0], *plan.spps.last().unwrap());
+    for env in &plan.envs {
+        for mat in &plan.materials {
+            for e in [Estimator::Plain, Estimator::Mis] {
+                let (a, b) = (err(env, mat, e, first), err(env, mat, e, last));
+                assert!(b < a / 3.0, "{env} {mat} {}: {a} at {first} spp, {b} at {last}", e.name());
+            }
+        }
+    }
+    for mat in ["medium-gm", "rough-gm"] {
+        let (f, p) = (err("studio.exr", mat, Estimator::Fis, 8), err("studio.exr", mat, Estimator::Plain, 8));
+        eprintln!("studio {mat}: fis 8 spp {f:.4}, plain 8 spp {p:.4}");
+        assert!(f < p, "studio {mat}: fis {f} not below plain {p} at 8 spp");
+    }
+    // The cache: a second run reads the references instead of recomputing them.
+    let cached = std::fs::read_dir(dir.path().join("cache")).unwrap().count();
+    assert_eq!(cached, plan.envs.len() * plan.materials.len());
+}
+
+/// The stability grid at its quick size: no NaN or Inf anywhere, and every evaluation case's GPU
+/// `f32` within `stability::AGREEMENT_BOUND` of the `f64` model (its doc says why that bound).
+#[test]
+fn stability_quick_has_no_nan_and_f32_agrees() {
+    let mut r = renderer();
+    let cases = stability::run(&mut r, true).expect("stability");
+    eprint!("{}", stability::table(&cases, "test"));
+    assert!(cases.len() >= 20);
+    for c in &cases {
+        assert_eq!(c.non_finite, 0, "{}: {} non-finite of {}", c.name, c.non_finite, c.values);
+        assert!(c.values > 0, "{}", c.name);
+        if let Some(a) = c.agreement {
+            assert!(a < stability::AGREEMENT_BOUND, "{}: {a}", c.name);
+        }
+        if let Some(a) = c.max_albedo {
+            assert!(a.is_finite() && a > 0.0, "{}: {a}", c.name);
+        }
+    }
+}
+
+#[test]
+fn commands_run_through_the_binary() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let json = dir.path().join("bench.json");
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = run(&["bench", "--quick", "--json", json.to_str().unwrap()]);
+    assert!(text.contains("per lobe") && text.contains("scalar"), "{text}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["configurations"].as_array().unwrap().len() > 5);
+    let md = dir.path().join("stability.md");
+    let text = run(&["report", "stability", "--quick", "--out", md.to_str().unwrap()]);
+    assert!(text.contains("NaN/Inf") && md.exists(), "{text}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(["report", "error-vs-time", "--quick"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "a missing --out is a usage error");
+}
