@@ -55,6 +55,11 @@ pub struct Measurement {
 }
 
 impl Measurement {
+    /// The summed minima of the passes whose names start with `prefix`.
+    pub fn min_ms(&self, prefix: &str) -> f64 {
+        self.passes.iter().filter(|p| p.0.starts_with(prefix)).map(|p| p.1 .1).sum::<f64>() + 0.0
+    }
+
     /// The summed medians of the passes whose names start with `prefix`.
     pub fn ms(&self, prefix: &str) -> f64 {
         self.passes.iter().filter(|p| p.0.starts_with(prefix)).map(|p| p.1 .0).sum::<f64>() + 0.0
