@@ -317,7 +317,7 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str) -> String {
             matched(Estimator::Mis)
         ));
     }
-    s.push_str("\n`speed-up` is the matching estimator's GPU ms over fis's at 8 spp (how many times longer it runs for the same error). The fis floor is its smallest error over the sweep and the first sample count within 5 % of it: prefiltering trades noise for a bias that more samples do not remove.\n");
+    s.push_str("\n`speed-up` is the matching estimator's GPU ms over fis's at 8 spp (how many times longer it runs for the same error). The fis floor is its smallest error over the sweep and the first sample count within 5 % of it; where that is the largest count, fis had not stopped improving within the sweep (its lod shrinks as the sample count grows, so its prefiltering bias shrinks too).\n");
     s
 }
 
