@@ -61,3 +61,13 @@ fn png_bytes(width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> ima
     image::codecs::png::PngEncoder::new(&mut png).write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)?;
     Ok(png)
 }
+
+/// Writes 8-bit RGBA pixels (already display-encoded) as PNG, atomically (the editor's screenshot).
+pub fn write_rgba8_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    use image::ImageEncoder;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
+        .map_err(|e| Error::input(path.display().to_string(), format!("cannot encode PNG: {e}")))?;
+    write_atomic(path, &png)
+}

@@ -11,6 +11,7 @@
 
 pub mod brdf;
 pub mod brush;
+pub mod editor;
 pub mod error;
 pub mod fsio;
 pub mod imageio;

@@ -152,6 +152,19 @@ impl Strokes {
     }
 }
 
+/// The strokes the editor's starter material and the `demo` command are painted with.
+pub const DEFAULT_STROKES: &str = include_str!("../../assets/default.strokes.json");
+
+/// The embedded default strokes.
+pub fn default_strokes() -> Result<Strokes> {
+    Strokes::from_json(DEFAULT_STROKES, "embedded default strokes")
+}
+
+/// The starter material: the default strokes painted on the scratch material.
+pub fn default_material() -> Result<Material> {
+    default_strokes()?.replay(&Material::scratch(), "embedded default strokes")
+}
+
 /// Applies one stroke: `create` at its first point; the others act on `lobe`, or on the lobe under
 /// the first point. Modify and streak put the brush at the last point; intensify and de-intensify
 /// step once per point.

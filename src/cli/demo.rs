@@ -7,13 +7,10 @@ use std::path::Path;
 use anyhow::Context;
 use brdf_shop::brdf::energy::Report;
 use brdf_shop::brdf::Material;
-use brdf_shop::brush::Strokes;
 use image::ImageEncoder;
 
-pub const DEFAULT_STROKES: &str = include_str!("../../assets/default.strokes.json");
-
 pub fn run(out: &Path) -> anyhow::Result<()> {
-    let strokes = Strokes::from_json(DEFAULT_STROKES, "embedded default strokes")?;
+    let strokes = brdf_shop::brush::strokes::default_strokes()?;
     let m = strokes.replay(&Material::scratch(), "embedded default strokes")?;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the folder", out.display()))?;
     m.save(&out.join("material.brdf.json"))?;

@@ -62,6 +62,31 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The interactive editor (needs a display; under CI: xvfb-run).
+    Edit {
+        #[arg(long)]
+        env: Option<PathBuf>,
+        /// `sphere`, `torus` (default) or an OBJ file.
+        #[arg(long)]
+        mesh: Option<String>,
+        #[arg(long)]
+        material: Option<PathBuf>,
+        /// Paint a strokes file through the window's input path.
+        #[arg(long)]
+        replay: Option<PathBuf>,
+        /// Save the window's last frame as PNG.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Write the material here on exit (and on Ctrl+S).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Exit once the replay is painted and a frame is shown.
+        #[arg(long)]
+        quit: bool,
+        /// Window size `WxH`.
+        #[arg(long, default_value = "1280x720")]
+        size: String,
+    },
     /// Headless GPU render of the material on a mesh under an environment, or of the canvas.
     Render(scene::SceneArgs),
     /// The same image on the CPU, converged (ground truth).
@@ -139,6 +164,19 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),
+        Some(Command::Edit { env, mesh, material, replay, screenshot, out, quit, size }) => {
+            let size = scene::parse_size(&size)?;
+            Ok(brdf_shop::editor::run(brdf_shop::editor::Options {
+                env,
+                mesh,
+                material,
+                replay,
+                screenshot,
+                out,
+                quit,
+                size,
+            })?)
+        }
         Some(Command::Bench { quick, json }) => measure::bench(quick, json.as_deref()),
         Some(Command::Report(Report::ErrorVsTime { quick, out })) => measure::error_vs_time(quick, &out),
         Some(Command::Report(Report::Stability { quick, out })) => measure::stability(quick, out.as_deref()),

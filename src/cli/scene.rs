@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use brdf_shop::brdf::Material;
-use brdf_shop::brush::Strokes;
 use brdf_shop::render::{Estimator, Settings, View};
 use brdf_shop::scene::{Camera, Environment, Mesh};
 use brdf_shop::Error;
@@ -74,7 +73,7 @@ pub struct Scene {
     pub settings: Settings,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), Error> {
+pub fn parse_size(s: &str) -> Result<(u32, u32), Error> {
     let bad = || Error::input("--size", format!("expected WxH with positive integers, got \"{s}\""));
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
@@ -97,12 +96,6 @@ fn parse_vec3(flag: &str, s: &str) -> Result<DVec3, Error> {
     }
 }
 
-/// The material the commands start from without `--material`.
-pub fn default_material() -> anyhow::Result<Material> {
-    let strokes = Strokes::from_json(super::demo::DEFAULT_STROKES, "embedded default strokes")?;
-    Ok(strokes.replay(&Material::scratch(), "embedded default strokes")?)
-}
-
 /// The canvas light: `--light`, else the environment's brightest direction in the camera's frame
 /// (canvas x = camera right, y = camera up, z = towards the viewer), else the default strokes' light.
 fn canvas_light(args: &SceneArgs, env: Option<&Environment>, camera: &Camera) -> anyhow::Result<DVec3> {
@@ -116,7 +109,7 @@ fn canvas_light(args: &SceneArgs, env: Option<&Environment>, camera: &Camera) ->
         let up = right.cross(forward);
         return Ok(DVec3::new(d.dot(right), d.dot(up), -d.dot(forward)));
     }
-    let strokes = Strokes::from_json(super::demo::DEFAULT_STROKES, "embedded default strokes")?;
+    let strokes = brdf_shop::brush::strokes::default_strokes()?;
     Ok(strokes.settings("embedded default strokes")?.canvas.light)
 }
 
@@ -146,7 +139,7 @@ pub fn load(args: &SceneArgs, default_spp: impl Fn(Estimator) -> u32) -> anyhow:
     };
     let material = match &args.material {
         Some(p) => Material::load(p)?,
-        None => default_material()?,
+        None => brdf_shop::brush::strokes::default_material()?,
     };
     let view = match args.view {
         ViewArg::Mesh => View::Mesh,

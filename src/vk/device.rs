@@ -86,6 +86,11 @@ fn bytemuck_name(name: &[std::ffi::c_char]) -> &[u8] {
 
 impl Device {
     pub fn new(instance: &Instance, filter: Option<&str>) -> Result<Device> {
+        Device::with_swapchain(instance, filter, false)
+    }
+
+    /// A device, with `VK_KHR_swapchain` enabled when `swapchain` (the editor's window).
+    pub fn with_swapchain(instance: &Instance, filter: Option<&str>, swapchain: bool) -> Result<Device> {
         let all = candidates(instance)?;
         let chosen = match filter {
             Some(f) => all.iter().find(|c| c.name.to_lowercase().contains(&f.to_lowercase())).ok_or_else(|| {
@@ -104,7 +109,11 @@ impl Device {
             .dynamic_rendering(true)
             .synchronization2(true)
             .maintenance4(true);
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).push_next(&mut features13);
+        let extensions = [ash::khr::swapchain::NAME.as_ptr()];
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(if swapchain { &extensions[..] } else { &[] })
+            .push_next(&mut features13);
         // SAFETY: `chosen.physical` belongs to this instance; `info` outlives the call.
         let raw = unsafe { instance.raw.create_device(chosen.physical, &info, None) }
             .map_err(|result| Error::Vulkan { call: "vkCreateDevice", result })?;

@@ -47,6 +47,11 @@ fn vk_err(call: &'static str) -> impl Fn(vk::Result) -> Error {
 
 impl Instance {
     pub fn new(validation: bool) -> Result<Instance> {
+        Instance::with_extensions(validation, &[])
+    }
+
+    /// An instance with `extra` extensions besides debug utils (the window's surface extensions).
+    pub fn with_extensions(validation: bool, extra: &[*const std::ffi::c_char]) -> Result<Instance> {
         // SAFETY: loading the system Vulkan loader; no Vulkan call has been made before.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             Error::NoDevice(format!(
@@ -58,7 +63,8 @@ impl Instance {
             .engine_name(c"brdf-shop")
             .api_version(vk::API_VERSION_1_3);
         let layers = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
-        let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
+        let mut extensions = vec![ash::ext::debug_utils::NAME.as_ptr()];
+        extensions.extend_from_slice(extra);
         let info = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)

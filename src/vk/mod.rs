@@ -14,6 +14,8 @@ pub mod pipeline;
 pub mod query;
 pub mod readback;
 pub mod shader;
+pub mod surface;
+pub mod swapchain;
 
 use std::mem::ManuallyDrop;
 use std::sync::Mutex;
@@ -64,8 +66,18 @@ impl Context {
     /// Creates the instance (validation layer on when `validation`) and the device: discrete >
     /// integrated > virtual > CPU, or the first whose name contains `device_filter`.
     pub fn new(validation: bool, device_filter: Option<&str>) -> Result<Context> {
-        let instance = Instance::new(validation)?;
-        let device = Device::new(&instance, device_filter)?;
+        Context::with_window_extensions(validation, device_filter, &[])
+    }
+
+    /// A context that can present: the instance gets `surface_extensions`, the device
+    /// `VK_KHR_swapchain` (when any surface extension is asked for).
+    pub fn with_window_extensions(
+        validation: bool,
+        device_filter: Option<&str>,
+        surface_extensions: &[*const std::ffi::c_char],
+    ) -> Result<Context> {
+        let instance = Instance::with_extensions(validation, surface_extensions)?;
+        let device = Device::with_swapchain(&instance, device_filter, !surface_extensions.is_empty())?;
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.raw.clone(),
             device: device.raw.clone(),
@@ -87,13 +99,18 @@ impl Context {
     /// The context the program uses: validation on in debug builds (or as `BRDF_SHOP_VALIDATION`
     /// says), device by `BRDF_SHOP_DEVICE`.
     pub fn from_env() -> Result<Context> {
+        Context::from_env_with(&[])
+    }
+
+    /// [`Context::from_env`] with surface extensions for a window.
+    pub fn from_env_with(surface_extensions: &[*const std::ffi::c_char]) -> Result<Context> {
         let validation = match std::env::var(VALIDATION_ENV).as_deref() {
             Ok("1") => true,
             Ok("0") => false,
             _ => cfg!(debug_assertions),
         };
         let filter = std::env::var(DEVICE_ENV).ok().filter(|s| !s.is_empty());
-        Context::new(validation, filter.as_deref())
+        Context::with_window_extensions(validation, filter.as_deref(), surface_extensions)
     }
 
     /// ERROR messages the validation layer reported so far.

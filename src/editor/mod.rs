@@ -1,0 +1,518 @@
+//! The interactive editor (paper §3.1, Fig. 1): one window with the mesh under the environment
+//! (left; orbit with the left button, zoom with the wheel, `F` frames it), the spherical canvas (right;
+//! paint with the left button, drag the light with the right, `L` resets it) and the BRDF graph
+//! (lower right; `G` toggles log scale). Brushes: `C` create, `M` modify, `S` streak, `I` intensify,
+//! `D` de-intensify; `P` split lobes on/off; Ctrl+Z / Ctrl+Shift+Z undo/redo; Ctrl+S saves. A
+//! dropped `.exr`/`.hdr`, `.obj` or `.brdf.json` file is loaded.
+//!
+//! Window events become [`state::Input`]s handled by [`state::State`]; `--replay` feeds the same
+//! inputs from a strokes file. Frames are rendered by `render::Renderer`, composed on the CPU and
+//! copied into the swapchain. After every change the material is written atomically to the recovery
+//! file, which the next start loads when no `--material` is given.
+
+pub mod graph;
+pub mod state;
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use ash::vk;
+use glam::DVec3;
+use gpu_allocator::MemoryLocation;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{Key, ModifiersState};
+use winit::window::{Window, WindowId};
+
+use crate::brdf::Material;
+use crate::brush::{BrushKind, Settings, Strokes};
+use crate::error::{Error, Result};
+use crate::imageio::srgb8;
+use crate::render::{Estimator, Renderer, View};
+use crate::scene::{Environment, Mesh};
+use crate::vk::surface::{self, Surface};
+use crate::vk::swapchain::{Acquired, Swapchain};
+use crate::vk::{Buffer, Context};
+
+use state::{Input, Layout, State};
+
+/// What `brdf-shop edit` was asked to do.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    pub env: Option<PathBuf>,
+    pub mesh: Option<String>,
+    pub material: Option<PathBuf>,
+    pub replay: Option<PathBuf>,
+    pub screenshot: Option<PathBuf>,
+    pub out: Option<PathBuf>,
+    pub quit: bool,
+    pub size: (u32, u32),
+}
+
+/// Where unsaved work goes: `BRDF_SHOP_RECOVERY`, else `$XDG_STATE_HOME/brdf-shop/recovery.brdf.json`,
+/// else `~/.local/state/brdf-shop/recovery.brdf.json`.
+pub fn recovery_path() -> PathBuf {
+    if let Ok(p) = std::env::var("BRDF_SHOP_RECOVERY") {
+        return PathBuf::from(p);
+    }
+    let base = std::env::var("XDG_STATE_HOME")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| PathBuf::from(std::env::var("HOME").unwrap_or_else(|_| ".".into())).join(".local/state"));
+    base.join("brdf-shop/recovery.brdf.json")
+}
+
+/// Writes the material atomically to the recovery file, creating its folder.
+pub fn save_recovery(m: &Material, path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    m.save(path)
+}
+
+struct Gpu {
+    swapchain: Option<Swapchain>,
+    surface: Option<Surface>,
+    staging: Option<Buffer>,
+    renderer: Renderer,
+    window: Arc<Window>,
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        if let Some(s) = self.swapchain.take() {
+            s.destroy(&self.renderer.ctx);
+        }
+        if let Some(b) = self.staging.take() {
+            b.destroy(&self.renderer.ctx);
+        }
+        if let Some(s) = self.surface.take() {
+            s.destroy();
+        }
+    }
+}
+
+struct App {
+    opts: Options,
+    env: Environment,
+    mesh: Mesh,
+    start: Material,
+    replay: Option<Strokes>,
+    pending: VecDeque<Input>,
+    gpu: Option<Gpu>,
+    state: Option<State>,
+    modifiers: ModifiersState,
+    log_graph: bool,
+    exposure: f64,
+    last_ms: f64,
+    frame: Option<Vec<u8>>,
+    error: Option<Error>,
+    done: bool,
+}
+
+/// The canvas light the editor starts with: the environment's brightest direction seen from the
+/// camera (canvas x = right, y = up, z = towards the viewer).
+fn light_from(env: &Environment, state_camera: &crate::scene::Camera) -> DVec3 {
+    let d = env.brightest_direction();
+    let (right, up, forward) = state_camera.basis();
+    DVec3::new(d.dot(right), d.dot(up), -d.dot(forward)).normalize()
+}
+
+impl App {
+    fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
+        self.error.get_or_insert(e);
+        el.exit();
+    }
+
+    fn init(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let attrs = Window::default_attributes()
+            .with_title("brdf-shop")
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.opts.size.0, self.opts.size.1));
+        let window =
+            Arc::new(el.create_window(attrs).map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?);
+        let display = window.display_handle().map_err(|e| Error::NoDevice(format!("no display handle: {e}")))?.as_raw();
+        let handle = window.window_handle().map_err(|e| Error::NoDevice(format!("no window handle: {e}")))?.as_raw();
+        let ctx = Context::from_env_with(&surface::required_extensions(display)?)?;
+        let mut renderer = Renderer::new(ctx)?;
+        renderer.set_environment(&self.env)?;
+        renderer.set_mesh(&self.mesh)?;
+        let surface = Surface::new(&renderer.ctx, display, handle)?;
+        let size = window.inner_size();
+        let mut gpu = Gpu { swapchain: None, surface: Some(surface), staging: None, renderer, window };
+        gpu.swapchain =
+            Swapchain::new(&gpu.renderer.ctx, gpu.surface.as_ref().expect("made above"), (size.width, size.height))?;
+        let (w, h) = gpu.swapchain.as_ref().map_or((size.width, size.height), |s| (s.extent.width, s.extent.height));
+        let settings = match &self.replay {
+            Some(s) => s.settings("replay")?,
+            None => {
+                let mut s = Settings::new(crate::brush::Canvas { light: DVec3::Z, intensity: 1.0 });
+                s.canvas.light = light_from(&self.env, &crate::scene::Camera::default());
+                s
+            }
+        };
+        let state = State::new(self.start.clone(), settings, Layout::new(w.max(1), h.max(1)));
+        if let Some(strokes) = &self.replay {
+            for st in &strokes.strokes {
+                self.pending.extend(state::stroke_inputs(&state.layout, st));
+            }
+        }
+        self.state = Some(state);
+        self.gpu = Some(gpu);
+        Ok(())
+    }
+
+    fn handle(&mut self, input: Input) -> Result<()> {
+        let Some(state) = self.state.as_mut() else { return Ok(()) };
+        let fx = state.handle(input);
+        if fx.material_changed {
+            save_recovery(state.material(), &recovery_path())?;
+        }
+        if fx.save {
+            let path = self
+                .opts
+                .out
+                .clone()
+                .or_else(|| self.opts.material.clone())
+                .unwrap_or_else(|| PathBuf::from("material.brdf.json"));
+            state.material().save(&path)?;
+            state.status = format!("saved {}", path.display());
+        }
+        if let Some(p) = fx.load {
+            self.load_dropped(&p)?;
+        }
+        if fx.redraw {
+            if let Some(g) = &self.gpu {
+                g.window.request_redraw();
+            }
+        }
+        Ok(())
+    }
+
+    fn load_dropped(&mut self, p: &Path) -> Result<()> {
+        let name = p.to_string_lossy().to_lowercase();
+        let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(()) };
+        if name.ends_with(".exr") || name.ends_with(".hdr") {
+            let env = Environment::load(p)?;
+            gpu.renderer.set_environment(&env)?;
+            state.default_light = light_from(&env, &state.camera());
+            state.settings.canvas.light = state.default_light;
+            self.env = env;
+        } else if name.ends_with(".obj") {
+            self.mesh = Mesh::load_obj(p)?;
+            gpu.renderer.set_mesh(&self.mesh)?;
+        } else if name.ends_with(".json") {
+            let m = Material::load(p)?;
+            state.history.push(m);
+        } else {
+            state.status = format!("{}: not an environment, mesh or material", p.display());
+        }
+        gpu.window.request_redraw();
+        Ok(())
+    }
+
+    /// Renders both views, composes the window's pixels and presents them.
+    fn draw(&mut self) -> Result<()> {
+        let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(()) };
+        let ctx_size = gpu.window.inner_size();
+        if gpu.swapchain.is_none() {
+            gpu.swapchain = Swapchain::new(
+                &gpu.renderer.ctx,
+                gpu.surface.as_ref().expect("live"),
+                (ctx_size.width, ctx_size.height),
+            )?;
+        }
+        let Some(sc) = gpu.swapchain.as_ref() else { return Ok(()) }; // minimised
+        let (w, h) = (sc.extent.width, sc.extent.height);
+        if (state.layout.width, state.layout.height) != (w, h) {
+            state.handle(Input::Resized(w, h));
+        }
+        let l = state.layout;
+        let m = state.material().clone();
+        let mesh_settings = crate::render::Settings {
+            width: l.mesh_w,
+            height: l.height,
+            spp: 8,
+            estimator: Estimator::Fis,
+            view: View::Mesh,
+            camera: state.camera(),
+            light: state.settings.canvas.light,
+            intensity: state.settings.canvas.intensity,
+        };
+        let mesh_frame = gpu.renderer.render(&m, &mesh_settings)?;
+        let canvas_settings =
+            crate::render::Settings { width: l.canvas, height: l.canvas, view: View::Canvas, ..mesh_settings.clone() };
+        let canvas_frame = gpu.renderer.render(&m, &canvas_settings)?;
+        self.last_ms = mesh_frame.timings.iter().chain(&canvas_frame.timings).map(|t| t.ms).sum();
+        let (w, h) = (w as usize, h as usize);
+        let mut rgba = vec![0u8; w * h * 4];
+        for px in rgba.chunks_exact_mut(4) {
+            px.copy_from_slice(&[32, 32, 36, 255]);
+        }
+        let blit = |rgba: &mut [u8], im: &crate::reference::Image, x0: usize, exposure: f64| {
+            for y in 0..(im.height as usize).min(h) {
+                for x in 0..(im.width as usize).min(w.saturating_sub(x0)) {
+                    let p = im.pixels[y * im.width as usize + x];
+                    let k = 4 * (y * w + x0 + x);
+                    rgba[k..k + 3].copy_from_slice(&[
+                        srgb8(p[0] as f64, exposure),
+                        srgb8(p[1] as f64, exposure),
+                        srgb8(p[2] as f64, exposure),
+                    ]);
+                }
+            }
+        };
+        blit(&mut rgba, &mesh_frame.image, 0, self.exposure * auto_exposure(&self.env));
+        blit(&mut rgba, &canvas_frame.image, l.canvas_x as usize, self.exposure);
+        let gx = l.canvas_x as usize;
+        let gy = (l.graph_y as usize).min(h);
+        graph::draw(&mut rgba, w, (gx, gy, w - gx, h - gy), &m, state.settings.canvas.light, self.log_graph);
+        let sums = m.energy_sums();
+        gpu.window.set_title(&format!(
+            "brdf-shop — {} — {} lobe(s), Σρ = ({:.2}, {:.2}, {:.2}) — {:.1} GPU ms — {}",
+            state.brush.name(),
+            m.lobes.len(),
+            sums[0],
+            sums[1],
+            sums[2],
+            self.last_ms,
+            state.status
+        ));
+        // The swapchain takes BGRA or RGBA.
+        let bgra = sc.format == vk::Format::B8G8R8A8_UNORM;
+        let mut bytes = rgba.clone();
+        if bgra {
+            for px in bytes.chunks_exact_mut(4) {
+                px.swap(0, 2);
+            }
+        }
+        let ctx = &gpu.renderer.ctx;
+        if gpu.staging.as_ref().is_none_or(|b| b.size != bytes.len() as u64) {
+            if let Some(b) = gpu.staging.take() {
+                b.destroy(ctx);
+            }
+            gpu.staging = Some(Buffer::new(
+                ctx,
+                bytes.len() as u64,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+                "window.pixels",
+            )?);
+        }
+        let staging = gpu.staging.as_mut().expect("made above");
+        staging.write(&bytes);
+        let fresh = match sc.acquire(ctx)? {
+            Acquired::Image(i) => sc.present_copy(ctx, i, staging)?,
+            Acquired::OutOfDate => false,
+        };
+        ctx.check_validation()?;
+        if !fresh {
+            if let Some(old) = gpu.swapchain.take() {
+                old.destroy(ctx);
+            }
+            gpu.window.request_redraw();
+        }
+        self.frame = Some(rgba);
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<()> {
+        let Some(state) = self.state.as_ref() else { return Ok(()) };
+        if let Some(p) = &self.opts.out {
+            state.material().save(p)?;
+        }
+        if let (Some(p), Some(frame)) = (&self.opts.screenshot, &self.frame) {
+            let l = state.layout;
+            crate::imageio::write_rgba8_png(p, l.width, l.height, frame)?;
+        }
+        Ok(())
+    }
+}
+
+/// Scales the mesh view so the environment's mean radiance shows as mid grey.
+fn auto_exposure(env: &Environment) -> f64 {
+    let (mut s, mut w) = (0.0, 0.0);
+    for j in 0..env.height {
+        let o = env.texel_solid_angle(j);
+        for t in &env.texels[j * env.width..(j + 1) * env.width] {
+            s += (t[0] + t[1] + t[2]).max(0.0) as f64 / 3.0 * o;
+            w += o;
+        }
+    }
+    if s > 0.0 {
+        (0.18 * w / s).clamp(1e-4, 1e4)
+    } else {
+        1.0
+    }
+}
+
+fn key_input(key: &Key, mods: ModifiersState) -> Option<Input> {
+    let Key::Character(c) = key else { return None };
+    let c = c.to_lowercase();
+    let ctrl = mods.control_key();
+    Some(match (c.as_str(), ctrl) {
+        ("z", true) if mods.shift_key() => Input::Redo,
+        ("z", true) => Input::Undo,
+        ("y", true) => Input::Redo,
+        ("s", true) => Input::Save,
+        ("c", false) => Input::Brush(BrushKind::Create),
+        ("m", false) => Input::Brush(BrushKind::Modify),
+        ("s", false) => Input::Brush(BrushKind::Streak),
+        ("i", false) => Input::Brush(BrushKind::Intensify),
+        ("d", false) => Input::Brush(BrushKind::Deintensify),
+        ("p", false) => Input::ToggleSplit,
+        ("l", false) => Input::ResetLight,
+        ("f", false) => Input::FrameView,
+        _ => return None,
+    })
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.gpu.is_none() {
+            if let Err(e) = self.init(el) {
+                self.fail(el, e);
+            }
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let input = match event {
+            WindowEvent::CloseRequested => {
+                self.done = true;
+                el.exit();
+                return;
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.draw() {
+                    self.fail(el, e);
+                }
+                return;
+            }
+            WindowEvent::Resized(s) => Input::Resized(s.width, s.height),
+            WindowEvent::ModifiersChanged(m) => {
+                self.modifiers = m.state();
+                return;
+            }
+            WindowEvent::CursorMoved { position, .. } => Input::CursorMoved(position.x, position.y),
+            WindowEvent::MouseInput { state, button, .. } => {
+                let pressed = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => Input::Button { pressed, right: false },
+                    MouseButton::Right => Input::Button { pressed, right: true },
+                    _ => return,
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => Input::Scroll(match delta {
+                MouseScrollDelta::LineDelta(_, y) => y as f64,
+                MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+            }),
+            WindowEvent::DroppedFile(p) => Input::Dropped(p),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                if let Key::Character(c) = &event.logical_key {
+                    match c.as_str() {
+                        "g" => self.log_graph = !self.log_graph,
+                        "+" | "=" => self.exposure *= 1.25,
+                        "-" => self.exposure /= 1.25,
+                        _ => {}
+                    }
+                }
+                match key_input(&event.logical_key, self.modifiers) {
+                    Some(i) => i,
+                    None => {
+                        if let Some(g) = &self.gpu {
+                            g.window.request_redraw();
+                        }
+                        return;
+                    }
+                }
+            }
+            _ => return,
+        };
+        if let Err(e) = self.handle(input) {
+            self.fail(el, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_none() {
+            return;
+        }
+        // Replayed inputs go through the same handler, one batch per turn of the loop.
+        if !self.pending.is_empty() {
+            while let Some(i) = self.pending.pop_front() {
+                let release = matches!(i, Input::Button { pressed: false, .. });
+                if let Err(e) = self.handle(i) {
+                    self.fail(el, e);
+                    return;
+                }
+                if release {
+                    break;
+                }
+            }
+            if let Some(g) = &self.gpu {
+                g.window.request_redraw();
+            }
+            return;
+        }
+        if self.opts.quit && self.frame.is_some() {
+            // One frame after the last input, then out.
+            if let Err(e) = self.draw() {
+                self.fail(el, e);
+                return;
+            }
+            self.done = true;
+            el.exit();
+        }
+    }
+}
+
+/// Runs the editor until the window closes (or, with `quit`, until the replay is done).
+pub fn run(opts: Options) -> Result<()> {
+    let env = match &opts.env {
+        Some(p) => Environment::load(p)?,
+        None => crate::measure::embedded_environment()?,
+    };
+    let mesh = Mesh::resolve(opts.mesh.as_deref().unwrap_or("torus"))?;
+    let replay = opts.replay.as_deref().map(Strokes::load).transpose()?;
+    let recovery = recovery_path();
+    let start = match (&opts.material, &replay) {
+        (Some(p), _) => Material::load(p)?,
+        (None, Some(_)) => Material::scratch(),
+        (None, None) => match Material::load(&recovery) {
+            Ok(m) if recovery.exists() => {
+                eprintln!("brdf-shop: restored the unsaved material of the last session from {}", recovery.display());
+                m
+            }
+            _ => crate::brush::strokes::default_material()?,
+        },
+    };
+    let event_loop = EventLoop::new().map_err(|e| {
+        Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
+    })?;
+    let mut app = App {
+        opts,
+        env,
+        mesh,
+        start,
+        replay,
+        pending: VecDeque::new(),
+        gpu: None,
+        state: None,
+        modifiers: ModifiersState::empty(),
+        log_graph: false,
+        exposure: 1.0,
+        last_ms: 0.0,
+        frame: None,
+        error: None,
+        done: false,
+    };
+    event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    app.finish()?;
+    drop(app.gpu.take());
+    Ok(())
+}

@@ -1,0 +1,282 @@
+//! The editor's state and what each input does to it, without any window or GPU: the material with
+//! its undo history, the brush and the stroke being painted, the canvas light, the orbit camera and
+//! the layout of the window. The window code turns winit events into [`Input`]s; `--replay`
+//! synthesises the same [`Input`]s from a strokes file, so both go through [`State::handle`].
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+
+use crate::brdf::Material;
+use crate::brush::canvas::{normal_at, Canvas};
+use crate::brush::history::History;
+use crate::brush::strokes::{apply, BrushKind, Stroke};
+use crate::brush::Settings;
+use crate::scene::Camera;
+
+/// A user action, from the window or synthesised.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    CursorMoved(f64, f64),
+    /// Left (`right == false`) or right button.
+    Button {
+        pressed: bool,
+        right: bool,
+    },
+    Scroll(f64),
+    Brush(BrushKind),
+    /// Pick the lobe strokes act on (the lobe list); `None`: the one under the brush.
+    SelectLobe(Option<usize>),
+    Undo,
+    Redo,
+    ToggleSplit,
+    ResetLight,
+    FrameView,
+    Save,
+    Resized(u32, u32),
+    Dropped(PathBuf),
+}
+
+/// Where the views sit in the window (pixels).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layout {
+    pub width: u32,
+    pub height: u32,
+    /// The mesh view: `(0, 0, mesh_w, height)`.
+    pub mesh_w: u32,
+    /// The canvas: a square of side `canvas` at `(canvas_x, 0)`.
+    pub canvas_x: u32,
+    pub canvas: u32,
+    /// The BRDF graph: `(canvas_x, graph_y, width − canvas_x, height − graph_y)`.
+    pub graph_y: u32,
+}
+
+impl Layout {
+    pub fn new(width: u32, height: u32) -> Layout {
+        let mesh_w = (width / 2).max(1);
+        let canvas = (width - mesh_w).min(height * 3 / 5).max(1);
+        Layout { width, height, mesh_w, canvas_x: mesh_w, canvas, graph_y: canvas.min(height) }
+    }
+
+    /// Canvas coordinates `(cu, cv)` of a window point.
+    pub fn canvas_coords(&self, x: f64, y: f64) -> (f64, f64) {
+        ((x - self.canvas_x as f64) / self.canvas as f64, y / self.canvas as f64)
+    }
+
+    /// The window point of canvas coordinates.
+    pub fn canvas_point(&self, cu: f64, cv: f64) -> (f64, f64) {
+        (self.canvas_x as f64 + cu * self.canvas as f64, cv * self.canvas as f64)
+    }
+
+    pub fn in_canvas(&self, x: f64, y: f64) -> bool {
+        let (cu, cv) = self.canvas_coords(x, y);
+        (0.0..1.0).contains(&cu) && (0.0..1.0).contains(&cv)
+    }
+
+    pub fn in_mesh(&self, x: f64, y: f64) -> bool {
+        x >= 0.0 && x < self.mesh_w as f64 && y >= 0.0 && y < self.height as f64
+    }
+}
+
+/// What the window must do after an input.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Effect {
+    pub redraw: bool,
+    pub material_changed: bool,
+    pub save: bool,
+    pub load: Option<PathBuf>,
+    /// A stroke that could not be applied, for the status line.
+    pub message: Option<String>,
+}
+
+/// The orbit camera's starting elevation: the torus seen from a little above, as in the paper.
+pub const DEFAULT_PITCH: f64 = 0.45;
+
+/// The orbit camera's starting distance: the unit-sphere-fitted mesh fits the half-window view.
+pub const DEFAULT_DISTANCE: f64 = 4.8;
+
+enum Drag {
+    None,
+    Stroke(Stroke),
+    Orbit { last: (f64, f64) },
+    Light,
+}
+
+pub struct State {
+    pub history: History,
+    pub settings: Settings,
+    pub brush: BrushKind,
+    pub lobe: Option<usize>,
+    pub layout: Layout,
+    /// Orbit camera: yaw and pitch in radians, distance to the target.
+    pub yaw: f64,
+    pub pitch: f64,
+    pub distance: f64,
+    pub fov_deg: f64,
+    /// The light the canvas starts with (the environment's brightest direction seen by the camera).
+    pub default_light: DVec3,
+    cursor: (f64, f64),
+    drag: Drag,
+    pub status: String,
+}
+
+impl State {
+    pub fn new(material: Material, settings: Settings, layout: Layout) -> State {
+        let default_light = settings.canvas.light;
+        State {
+            history: History::new(material),
+            settings,
+            brush: BrushKind::Create,
+            lobe: None,
+            layout,
+            yaw: 0.0,
+            pitch: DEFAULT_PITCH,
+            distance: DEFAULT_DISTANCE,
+            fov_deg: 30.0,
+            default_light,
+            cursor: (0.0, 0.0),
+            drag: Drag::None,
+            status: String::new(),
+        }
+    }
+
+    pub fn material(&self) -> &Material {
+        self.history.current()
+    }
+
+    /// The mesh camera of the orbit.
+    pub fn camera(&self) -> Camera {
+        let (cy, sy) = (self.yaw.cos(), self.yaw.sin());
+        let (cp, sp) = (self.pitch.cos(), self.pitch.sin());
+        let eye = DVec3::new(sy * cp, sp, cy * cp) * self.distance;
+        Camera { eye, target: DVec3::ZERO, up: DVec3::Y, fov_deg: self.fov_deg }
+    }
+
+    pub fn handle(&mut self, input: Input) -> Effect {
+        let mut fx = Effect::default();
+        match input {
+            Input::CursorMoved(x, y) => {
+                let prev = self.cursor;
+                self.cursor = (x, y);
+                match &mut self.drag {
+                    Drag::Stroke(st) => {
+                        let (cu, cv) = self.layout.canvas_coords(x, y);
+                        st.points.push([cu, cv]);
+                    }
+                    Drag::Orbit { last } => {
+                        let (dx, dy) = (x - last.0, y - last.1);
+                        *last = (x, y);
+                        self.yaw -= dx * 0.01;
+                        self.pitch = (self.pitch + dy * 0.01).clamp(-1.5, 1.5);
+                        fx.redraw = true;
+                    }
+                    Drag::Light => {
+                        fx.redraw |= self.set_light_at(x, y);
+                    }
+                    Drag::None => {}
+                }
+                let _ = prev;
+            }
+            Input::Button { pressed: true, right: false } => {
+                let (x, y) = self.cursor;
+                if self.layout.in_canvas(x, y) {
+                    let (cu, cv) = self.layout.canvas_coords(x, y);
+                    self.drag = Drag::Stroke(Stroke { brush: self.brush, points: vec![[cu, cv]], lobe: self.lobe });
+                } else if self.layout.in_mesh(x, y) {
+                    self.drag = Drag::Orbit { last: (x, y) };
+                }
+            }
+            Input::Button { pressed: true, right: true } => {
+                let (x, y) = self.cursor;
+                if self.layout.in_canvas(x, y) {
+                    self.drag = Drag::Light;
+                    fx.redraw |= self.set_light_at(x, y);
+                }
+            }
+            Input::Button { pressed: false, .. } => {
+                if let Drag::Stroke(st) = std::mem::replace(&mut self.drag, Drag::None) {
+                    match apply(self.material(), &self.settings, &st) {
+                        Ok(m) => {
+                            self.history.push(m);
+                            self.status = format!("{} applied", st.brush.name());
+                            fx.material_changed = true;
+                            fx.redraw = true;
+                        }
+                        Err(e) => {
+                            self.status = format!("{}: {e}", st.brush.name());
+                            fx.message = Some(self.status.clone());
+                            fx.redraw = true;
+                        }
+                    }
+                }
+            }
+            Input::Scroll(d) => {
+                if self.layout.in_mesh(self.cursor.0, self.cursor.1) {
+                    self.distance = (self.distance * (1.0 - 0.1 * d)).clamp(1.2, 50.0);
+                    fx.redraw = true;
+                }
+            }
+            Input::Brush(b) => {
+                self.brush = b;
+                self.status = format!("brush: {}", b.name());
+                fx.redraw = true;
+            }
+            Input::SelectLobe(k) => self.lobe = k,
+            Input::Undo => {
+                fx.material_changed = self.history.undo();
+                fx.redraw = fx.material_changed;
+            }
+            Input::Redo => {
+                fx.material_changed = self.history.redo();
+                fx.redraw = fx.material_changed;
+            }
+            Input::ToggleSplit => {
+                self.settings.split_lobes = !self.settings.split_lobes;
+                self.status = format!("split lobes {}", if self.settings.split_lobes { "on" } else { "off" });
+                fx.redraw = true;
+            }
+            Input::ResetLight => {
+                self.settings.canvas.light = self.default_light;
+                fx.redraw = true;
+            }
+            Input::FrameView => {
+                (self.yaw, self.pitch, self.distance) = (0.0, DEFAULT_PITCH, DEFAULT_DISTANCE);
+                fx.redraw = true;
+            }
+            Input::Save => fx.save = true,
+            Input::Resized(w, h) => {
+                self.layout = Layout::new(w.max(1), h.max(1));
+                fx.redraw = true;
+            }
+            Input::Dropped(p) => fx.load = Some(p),
+        }
+        fx
+    }
+
+    /// Points the canvas light at the sphere normal under `(x, y)`; false off the sphere.
+    fn set_light_at(&mut self, x: f64, y: f64) -> bool {
+        let (cu, cv) = self.layout.canvas_coords(x, y);
+        match normal_at(cu, cv).and_then(|n| Canvas::new(n, self.settings.canvas.intensity)) {
+            Some(c) => {
+                self.settings.canvas = c;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// The inputs that paint `stroke` through the window: pick its brush (and lobe), move to its first
+/// point, press, move through the others, release.
+pub fn stroke_inputs(layout: &Layout, stroke: &Stroke) -> Vec<Input> {
+    let mut out = vec![Input::Brush(stroke.brush), Input::SelectLobe(stroke.lobe)];
+    for (i, p) in stroke.points.iter().enumerate() {
+        let (x, y) = layout.canvas_point(p[0], p[1]);
+        out.push(Input::CursorMoved(x, y));
+        if i == 0 {
+            out.push(Input::Button { pressed: true, right: false });
+        }
+    }
+    out.push(Input::Button { pressed: false, right: false });
+    out
+}

@@ -1,0 +1,95 @@
+//! The editor as a user drives it: under Xvfb on this machine's Vulkan device (lavapipe in CI),
+//! `edit --replay S --screenshot P --out M --quit` paints the strokes through the window's input path,
+//! saves a screenshot and the material, and leaves the recovery file. Debug builds run with the
+//! validation layer, and a validation error ends the editor with exit status 2.
+
+use std::path::Path;
+use std::process::Command;
+
+use brdf_shop::brdf::Material;
+
+/// Relative tolerance between the editor's material and `paint`'s: the stroke points pass through
+/// window pixel coordinates (`x = x0 + cu·s`, then back), which changes them by about one ulp; the
+/// brushes' solves turn that into differences of ~1e-14 (measured), far below 1e-9.
+const SAME: f64 = 1e-9;
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= SAME * a.abs().max(b.abs()).max(1e-12)
+}
+
+fn same_material(a: &Material, b: &Material) -> bool {
+    a.lobes.len() == b.lobes.len()
+        && a.normalization == b.normalization
+        && a.symmetrize == b.symmetrize
+        && (0..3).all(|c| close(a.diffuse[c], b.diffuse[c]))
+        && a.lobes.iter().zip(&b.lobes).all(|(x, y)| {
+            (0..3).all(|c| close(x.albedo[c], y.albedo[c]))
+                && close(x.alpha_x, y.alpha_x)
+                && close(x.alpha_y, y.alpha_y)
+                && close(x.tangent_angle.cos(), y.tangent_angle.cos())
+                && close(x.tangent_angle.sin(), y.tangent_angle.sin())
+                && x.rotation.abs_diff_eq(y.rotation, 1e-9)
+                && x.split == y.split
+        })
+}
+
+/// The standard deviation of the luminance over a rectangle of an RGBA image: zero for a clear colour.
+fn spread(img: &image::RgbaImage, (x0, y0, w, h): (u32, u32, u32, u32)) -> f64 {
+    let v: Vec<f64> = (y0..y0 + h)
+        .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let p = img.get_pixel(x, y);
+            (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0
+        })
+        .collect();
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+#[test]
+fn replay_through_the_window_equals_paint() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let strokes = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.strokes.json");
+    let (shot, out, recovery, painted) = (
+        dir.path().join("shot.png"),
+        dir.path().join("m.brdf.json"),
+        dir.path().join("recovery.brdf.json"),
+        dir.path().join("p.brdf.json"),
+    );
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x720x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--replay"])
+        .arg(&strokes)
+        .arg("--screenshot")
+        .arg(&shot)
+        .arg("--out")
+        .arg(&out)
+        .args(["--quit", "--size", "960x540"])
+        .env("BRDF_SHOP_RECOVERY", &recovery)
+        .output()
+        .expect("xvfb-run (tools/setup installs xvfb)");
+    assert!(run.status.success(), "editor failed: {}", String::from_utf8_lossy(&run.stderr));
+    let paint = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(["paint", "--strokes"])
+        .arg(&strokes)
+        .arg("--out")
+        .arg(&painted)
+        .output()
+        .unwrap();
+    assert!(paint.status.success());
+    let (a, b) = (Material::load(&out).unwrap(), Material::load(&painted).unwrap());
+    assert!(same_material(&a, &b), "editor: {a:?}\npaint: {b:?}");
+    // The recovery file holds the same material.
+    let r = Material::load(&recovery).expect("the recovery file exists and loads");
+    assert!(same_material(&r, &a));
+    // Every panel of the screenshot has content: mesh (left half), canvas (upper right), graph
+    // (lower right). A clear colour would have a spread of 0; 2 (of 255) is well above rounding.
+    let img = image::open(&shot).expect("a PNG").to_rgba8();
+    assert_eq!(img.dimensions(), (960, 540));
+    let canvas = 324; // Layout::new(960, 540): min(480, 540·3/5)
+    for (name, rect) in
+        [("mesh", (0, 0, 480, 540)), ("canvas", (480, 0, canvas, canvas)), ("graph", (480, canvas, 480, 540 - canvas))]
+    {
+        let s = spread(&img, rect);
+        assert!(s > 2.0, "{name} panel looks empty (spread {s:.2})");
+    }
+}
