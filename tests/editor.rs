@@ -93,3 +93,33 @@ fn replay_through_the_window_equals_paint() {
         assert!(s > 2.0, "{name} panel looks empty (spread {s:.2})");
     }
 }
+
+/// Progressive refinement through the window: with `--converge` the editor keeps adding `mis`
+/// samples while nothing changes, up to 1024 per pixel, then leaves (small window to stay fast).
+#[test]
+fn idle_frames_refine_the_mesh_view() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let shot = dir.path().join("converged.png");
+    let run = Command::new("xvfb-run")
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            env!("CARGO_BIN_EXE_brdf-shop"),
+            "edit",
+            "--mesh",
+            "sphere",
+            "--quit",
+            "--converge",
+        ])
+        .args(["--size", "256x144", "--screenshot"])
+        .arg(&shot)
+        .env("BRDF_SHOP_RECOVERY", dir.path().join("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert!(spread(&img, (0, 0, 128, 144)) > 2.0);
+}

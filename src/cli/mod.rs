@@ -83,6 +83,9 @@ enum Command {
         /// Exit once the replay is painted and a frame is shown.
         #[arg(long)]
         quit: bool,
+        /// With --quit: first refine the mesh view to 1024 spp of the mis estimator.
+        #[arg(long)]
+        converge: bool,
         /// Window size `WxH`.
         #[arg(long, default_value = "1280x720")]
         size: String,
@@ -164,7 +167,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),
-        Some(Command::Edit { env, mesh, material, replay, screenshot, out, quit, size }) => {
+        Some(Command::Edit { env, mesh, material, replay, screenshot, out, quit, converge, size }) => {
             let size = scene::parse_size(&size)?;
             Ok(brdf_shop::editor::run(brdf_shop::editor::Options {
                 env,
@@ -174,6 +177,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 screenshot,
                 out,
                 quit,
+                converge,
                 size,
             })?)
         }

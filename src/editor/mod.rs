@@ -49,6 +49,8 @@ pub struct Options {
     pub screenshot: Option<PathBuf>,
     pub out: Option<PathBuf>,
     pub quit: bool,
+    /// With `quit`: refine the mesh view to REFINE_MAX samples before leaving.
+    pub converge: bool,
     pub size: (u32, u32),
 }
 
@@ -110,7 +112,17 @@ struct App {
     frame: Option<Vec<u8>>,
     error: Option<Error>,
     done: bool,
+    /// Progressive refinement: what the accumulated `mis` image shows, its running sum and samples.
+    refine_key: String,
+    refine_sum: Vec<[f32; 4]>,
+    refine_samples: u32,
+    /// Wall-clock milliseconds of each frame drawn (render, compose, present).
+    frame_ms: Vec<f64>,
 }
+
+/// Samples per pixel added by each refining frame, and where refinement stops.
+pub const REFINE_STEP: u32 = 16;
+pub const REFINE_MAX: u32 = 1024;
 
 /// The canvas light the editor starts with: the environment's brightest direction seen from the
 /// camera (canvas x = right, y = up, z = towards the viewer).
@@ -146,13 +158,14 @@ impl App {
         let (w, h) = gpu.swapchain.as_ref().map_or((size.width, size.height), |s| (s.extent.width, s.extent.height));
         let settings = match &self.replay {
             Some(s) => s.settings("replay")?,
-            None => {
-                let mut s = Settings::new(crate::brush::Canvas { light: DVec3::Z, intensity: 1.0 });
-                s.canvas.light = light_from(&self.env, &crate::scene::Camera::default());
-                s
-            }
+            None => Settings::new(crate::brush::Canvas { light: DVec3::Z, intensity: 1.0 }),
         };
-        let state = State::new(self.start.clone(), settings, Layout::new(w.max(1), h.max(1)));
+        let mut state = State::new(self.start.clone(), settings, Layout::new(w.max(1), h.max(1)));
+        if self.replay.is_none() {
+            // The light as the orbit camera sees the environment's brightest direction.
+            state.default_light = light_from(&self.env, &state.camera());
+            state.settings.canvas.light = state.default_light;
+        }
         if let Some(strokes) = &self.replay {
             for st in &strokes.strokes {
                 self.pending.extend(state::stroke_inputs(&state.layout, st));
@@ -214,6 +227,13 @@ impl App {
 
     /// Renders both views, composes the window's pixels and presents them.
     fn draw(&mut self) -> Result<()> {
+        let start = std::time::Instant::now();
+        let r = self.draw_frame();
+        self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        r
+    }
+
+    fn draw_frame(&mut self) -> Result<()> {
         let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(()) };
         let ctx_size = gpu.window.inner_size();
         if gpu.swapchain.is_none() {
@@ -240,7 +260,40 @@ impl App {
             light: state.settings.canvas.light,
             intensity: state.settings.canvas.intensity,
         };
-        let mesh_frame = gpu.renderer.render(&m, &mesh_settings)?;
+        // Any change shows the fast `fis` image and restarts the accumulation; while nothing changes,
+        // each frame adds REFINE_STEP samples of `mis` (the true image, not the prefiltered blur).
+        let key = format!("{m:?}{:?}{:?}{:?}", mesh_settings.camera, l, self.env.origin);
+        let mesh_frame = if key != self.refine_key {
+            self.refine_key = key;
+            self.refine_samples = 0;
+            self.refine_sum.clear();
+            gpu.renderer.render(&m, &mesh_settings)?
+        } else if self.refine_samples < REFINE_MAX {
+            let mis = crate::render::Settings { estimator: Estimator::Mis, spp: REFINE_STEP, ..mesh_settings.clone() };
+            gpu.renderer.mis_offset = self.refine_samples;
+            let f = gpu.renderer.render(&m, &mis);
+            gpu.renderer.mis_offset = 0;
+            let mut f = f?;
+            if self.refine_sum.len() != f.image.pixels.len() {
+                self.refine_sum = vec![[0.0; 4]; f.image.pixels.len()];
+            }
+            self.refine_samples += REFINE_STEP;
+            let n = (self.refine_samples / REFINE_STEP) as f32;
+            for (acc, p) in self.refine_sum.iter_mut().zip(&mut f.image.pixels) {
+                for c in 0..4 {
+                    acc[c] += p[c];
+                    p[c] = acc[c] / n;
+                }
+            }
+            f
+        } else {
+            let n = (self.refine_samples / REFINE_STEP).max(1) as f32;
+            let pixels = self.refine_sum.iter().map(|a| a.map(|v| v / n)).collect();
+            crate::render::Frame {
+                image: crate::reference::Image { width: l.mesh_w, height: l.height, pixels },
+                timings: Vec::new(),
+            }
+        };
         let canvas_settings =
             crate::render::Settings { width: l.canvas, height: l.canvas, view: View::Canvas, ..mesh_settings.clone() };
         let canvas_frame = gpu.renderer.render(&m, &canvas_settings)?;
@@ -269,8 +322,10 @@ impl App {
         let gy = (l.graph_y as usize).min(h);
         graph::draw(&mut rgba, w, (gx, gy, w - gx, h - gy), &m, state.settings.canvas.light, self.log_graph);
         let sums = m.energy_sums();
+        let quality =
+            if self.refine_samples == 0 { "fis 8 spp".to_string() } else { format!("mis {} spp", self.refine_samples) };
         gpu.window.set_title(&format!(
-            "brdf-shop — {} — {} lobe(s), Σρ = ({:.2}, {:.2}, {:.2}) — {:.1} GPU ms — {}",
+            "brdf-shop — {} — {} lobe(s), Σρ = ({:.2}, {:.2}, {:.2}) — {quality}, {:.1} GPU ms — {}",
             state.brush.name(),
             m.lobes.len(),
             sums[0],
@@ -456,6 +511,13 @@ impl ApplicationHandler for App {
             }
             return;
         }
+        // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast image).
+        if (!self.opts.quit || self.opts.converge) && self.frame.is_some() && self.refine_samples < REFINE_MAX {
+            if let Some(g) = &self.gpu {
+                g.window.request_redraw();
+            }
+            return;
+        }
         if self.opts.quit && self.frame.is_some() {
             // One frame after the last input, then out.
             if let Err(e) = self.draw() {
@@ -507,12 +569,27 @@ pub fn run(opts: Options) -> Result<()> {
         frame: None,
         error: None,
         done: false,
+        refine_key: String::new(),
+        refine_sum: Vec::new(),
+        refine_samples: 0,
+        frame_ms: Vec::new(),
     };
     event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
     if let Some(e) = app.error.take() {
         return Err(e);
     }
     app.finish()?;
+    if app.opts.quit && !app.frame_ms.is_empty() {
+        let (median, min, max) = crate::measure::stats(&app.frame_ms);
+        let l = app.state.as_ref().map(|s| s.layout);
+        eprintln!(
+            "{} frames at {}x{}: median {median:.1} ms (min {min:.1}, max {max:.1}); mesh view at {} spp",
+            app.frame_ms.len(),
+            l.map_or(0, |l| l.width),
+            l.map_or(0, |l| l.height),
+            if app.refine_samples == 0 { "fis 8".to_string() } else { format!("mis {}", app.refine_samples) }
+        );
+    }
     drop(app.gpu.take());
     Ok(())
 }

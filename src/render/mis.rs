@@ -35,8 +35,15 @@ impl MisPass {
         Ok(MisPass { pipeline })
     }
 
-    /// Adds the estimate over samples `0..samples` of the `sequence` buffer.
-    pub fn record(&self, rec: &Recording<'_>, samples: u32, material: &Buffer, sequence: &Buffer) -> Result<()> {
+    /// Adds the estimate over samples `first..first + samples` of the `sequence` buffer (their mean).
+    pub fn record(
+        &self,
+        rec: &Recording<'_>,
+        first: u32,
+        samples: u32,
+        material: &Buffer,
+        sequence: &Buffer,
+    ) -> Result<()> {
         let t = rec.targets;
         let env = rec.env()?;
         let set = rec.set(
@@ -53,14 +60,14 @@ impl MisPass {
                 Binding::Storage(&env.pdf),
             ],
         )?;
-        let mut first = 0;
-        while first < samples {
-            let count = CHUNK.min(samples - first);
+        let (mut at, end) = (first, first + samples);
+        while at < end {
+            let count = CHUNK.min(end - at);
             let mut push = rec.push;
-            push.params = [0, count, first, samples];
+            push.params = [0, count, at, samples];
             push.fparams[3] = 1.0 / samples as f32;
             rec.dispatch(&self.pipeline, set, &push);
-            first += count;
+            at += count;
         }
         Ok(())
     }

@@ -173,6 +173,9 @@ impl Passes {
 pub struct Renderer {
     /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
     pub scalar_lobes: bool,
+    /// Where in its sequence the `mis` estimator starts: successive frames with offsets 0, N, 2N …
+    /// are independent parts of one long estimate (the editor's progressive refinement).
+    pub mis_offset: u32,
     passes: Option<Passes>,
     env: Option<GpuEnvironment>,
     mesh: Option<GpuMesh>,
@@ -200,6 +203,7 @@ impl Renderer {
         let passes = Passes::new(&ctx)?;
         Ok(Renderer {
             scalar_lobes: false,
+            mis_offset: 0,
             passes: Some(passes),
             env: None,
             mesh: None,
@@ -271,7 +275,8 @@ impl Renderer {
     fn buffers_for(&mut self, spp: u32, estimator: Estimator) -> Result<()> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         if estimator == Estimator::Mis {
-            if self.sequence.as_ref().is_none_or(|s| s.0 != spp) {
+            let spp = self.mis_offset.saturating_add(spp).next_power_of_two();
+            if self.sequence.as_ref().is_none_or(|s| s.0 < spp) {
                 if let Some((_, b)) = self.sequence.take() {
                     b.destroy(&self.ctx);
                 }
@@ -372,7 +377,9 @@ impl Renderer {
                     match settings.estimator {
                         Estimator::Mis => {
                             let seq = &self.sequence.as_ref().expect("made above").1;
-                            ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, settings.spp, material_buf, seq))?;
+                            ts.time(ctx, cmd, "mis", || {
+                                passes.mis.record(&rec, self.mis_offset, settings.spp, material_buf, seq)
+                            })?;
                         }
                         Estimator::Fis | Estimator::Plain => {
                             if material.diffuse.iter().any(|&d| d != 0.0) {
