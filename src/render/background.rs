@@ -25,14 +25,7 @@ impl BackgroundPass {
     pub fn record(&self, rec: &Recording<'_>) -> Result<()> {
         let t = rec.targets;
         let env = rec.env()?;
-        t.accum.barrier(
-            rec.ctx,
-            rec.cmd,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::GENERAL,
-            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
-            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-        );
+        t.start_accum(rec.ctx, rec.cmd);
         let set = rec.set(
             &self.pipeline,
             &[

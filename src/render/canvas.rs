@@ -23,14 +23,7 @@ impl CanvasPass {
 
     pub fn record(&self, rec: &Recording<'_>, material: &Buffer) -> Result<()> {
         let t = rec.targets;
-        t.accum.barrier(
-            rec.ctx,
-            rec.cmd,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::GENERAL,
-            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
-            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-        );
+        t.start_accum(rec.ctx, rec.cmd);
         let set = rec.set(&self.pipeline, &[Binding::StorageImage(t.accum.view), Binding::Storage(material)])?;
         rec.dispatch(&self.pipeline, set, &rec.push);
         Ok(())

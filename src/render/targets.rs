@@ -54,6 +54,19 @@ impl Targets {
         Ok(Targets { width, height, position: next(), normal: next(), depth: next(), accum: next() })
     }
 
+    /// Makes the accumulation image writable by the compute pass that starts a frame (its old
+    /// contents are dropped).
+    pub fn start_accum(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        self.accum.barrier(
+            ctx,
+            cmd,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::GENERAL,
+            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+        );
+    }
+
     pub fn destroy(self, ctx: &Context) {
         for i in [self.position, self.normal, self.depth, self.accum] {
             i.destroy(ctx);

@@ -42,6 +42,26 @@ fn layouts(
     }
 }
 
+/// The pipeline of a `vkCreate*Pipelines` result, or its layouts destroyed and the error.
+fn finish(
+    ctx: &Context,
+    created: std::result::Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)>,
+    shell: Pipeline,
+    call: &'static str,
+    name: &str,
+) -> Result<Pipeline> {
+    match created {
+        Ok(p) => {
+            ctx.device.set_name(p[0], name);
+            Ok(Pipeline { raw: p[0], ..shell })
+        }
+        Err((_, result)) => {
+            shell.destroy(ctx);
+            Err(vk_err(call)(result))
+        }
+    }
+}
+
 impl Pipeline {
     /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`.
     pub fn compute(
@@ -84,16 +104,7 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_stages: stages,
         };
-        match created {
-            Ok(p2) => {
-                ctx.device.set_name(p2[0], name);
-                Ok(Pipeline { raw: p2[0], ..p })
-            }
-            Err((_, result)) => {
-                p.destroy(ctx);
-                Err(vk_err("vkCreateComputePipelines")(result))
-            }
-        }
+        finish(ctx, created, p, "vkCreateComputePipelines", name)
     }
 
     /// The G-buffer pipeline: vertex buffer of `stride` bytes with `attributes` (location, format,
@@ -195,16 +206,7 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_stages: stages,
         };
-        match created {
-            Ok(p2) => {
-                ctx.device.set_name(p2[0], name);
-                Ok(Pipeline { raw: p2[0], ..p })
-            }
-            Err((_, result)) => {
-                p.destroy(ctx);
-                Err(vk_err("vkCreateGraphicsPipelines")(result))
-            }
-        }
+        finish(ctx, created, p, "vkCreateGraphicsPipelines", name)
     }
 
     /// Binds the pipeline, its descriptor set and the push constants.

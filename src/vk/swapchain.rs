@@ -124,22 +124,7 @@ impl Swapchain {
     pub fn present_copy(&self, ctx: &Context, index: u32, pixels: &Buffer) -> Result<bool> {
         let image = self.images[index as usize];
         let range = super::image::range(vk::ImageAspectFlags::COLOR, 1);
-        let barrier = |from,
-                       to,
-                       src: (vk::PipelineStageFlags2, vk::AccessFlags2),
-                       dst: (vk::PipelineStageFlags2, vk::AccessFlags2)| {
-            vk::ImageMemoryBarrier2::default()
-                .image(image)
-                .old_layout(from)
-                .new_layout(to)
-                .src_stage_mask(src.0)
-                .src_access_mask(src.1)
-                .dst_stage_mask(dst.0)
-                .dst_access_mask(dst.1)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .subresource_range(range)
-        };
+        let barrier = |from, to, src, dst| super::image::transition(image, range, (from, to), src, dst);
         ctx.commands.run(&ctx.device, |cmd| {
             let copy = (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE);
             let b = [barrier(
