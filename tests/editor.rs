@@ -123,3 +123,41 @@ fn idle_frames_refine_the_mesh_view() {
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(spread(&img, (0, 0, 128, 144)) > 2.0);
 }
+
+/// Unsaved work is offered back, not forced: a start that finds a recovery file says so and keeps
+/// the starter material until the user presses R (here nobody does).
+#[test]
+fn recovery_file_is_offered_back() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let recovery = dir.path().join("recovery.brdf.json");
+    let mut m = Material::scratch();
+    m.diffuse = [0.1, 0.2, 0.3];
+    m.save(&recovery).unwrap();
+    let out = dir.path().join("out.brdf.json");
+    let run = Command::new("xvfb-run")
+        .args([
+            "-a",
+            "-s",
+            "-screen 0 640x480x24",
+            env!("CARGO_BIN_EXE_brdf-shop"),
+            "edit",
+            "--quit",
+            "--size",
+            "256x144",
+            "--out",
+        ])
+        .arg(&out)
+        .env("BRDF_SHOP_RECOVERY", &recovery)
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("press R"), "{stderr}");
+    let written = Material::load(&out).unwrap();
+    assert_ne!(written.diffuse, [0.1, 0.2, 0.3], "the recovery file was loaded without asking");
+    assert_eq!(
+        Material::load(&recovery).unwrap().diffuse,
+        [0.1, 0.2, 0.3],
+        "the offer left the recovery file as it was"
+    );
+}

@@ -118,6 +118,8 @@ struct App {
     refine_samples: u32,
     /// Wall-clock milliseconds of each frame drawn (render, compose, present).
     frame_ms: Vec<f64>,
+    /// The recovery file's material, offered until restored (R) or replaced by an edit.
+    recovered: Option<Material>,
 }
 
 /// Samples per pixel added by each refining frame, and where refinement stops.
@@ -172,6 +174,14 @@ impl App {
             }
         }
         self.state = Some(state);
+        if self.recovered.is_some() {
+            if let Some(s) = self.state.as_mut() {
+                s.status = format!(
+                    "unsaved work from the last session found ({}): press R to restore it",
+                    recovery_path().display()
+                );
+            }
+        }
         self.gpu = Some(gpu);
         Ok(())
     }
@@ -318,6 +328,18 @@ impl App {
         };
         blit(&mut rgba, &mesh_frame.image, 0, self.exposure * auto_exposure(&self.env));
         blit(&mut rgba, &canvas_frame.image, l.canvas_x as usize, self.exposure);
+        // The snap marker: the mirror point, where a new lobe needs no rotation (paper §3.3.1).
+        if let Some((cu, cv)) = state.settings.canvas.mirror_point() {
+            let (mx, my) = l.canvas_point(cu, cv);
+            for d in -6i64..=6 {
+                for (x, y) in [(mx as i64 + d, my as i64), (mx as i64, my as i64 + d)] {
+                    if x >= l.canvas_x as i64 && x < w as i64 && y >= 0 && y < (l.canvas as i64).min(h as i64) {
+                        let k = 4 * (y as usize * w + x as usize);
+                        rgba[k..k + 3].copy_from_slice(&[255, 210, 60]);
+                    }
+                }
+            }
+        }
         let gx = l.canvas_x as usize;
         let gy = (l.graph_y as usize).min(h);
         graph::draw(&mut rgba, w, (gx, gy, w - gx, h - gy), &m, state.settings.canvas.light, self.log_graph);
@@ -466,6 +488,15 @@ impl ApplicationHandler for App {
             WindowEvent::DroppedFile(p) => Input::Dropped(p),
             WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
                 if let Key::Character(c) = &event.logical_key {
+                    if c.as_str() == "r" {
+                        if let (Some(m), Some(s)) = (self.recovered.take(), self.state.as_mut()) {
+                            s.history.push(m);
+                            s.status = "restored the last session's material".into();
+                            if let Some(g) = &self.gpu {
+                                g.window.request_redraw();
+                            }
+                        }
+                    }
                     match c.as_str() {
                         "g" => self.log_graph = !self.log_graph,
                         "+" | "=" => self.exposure *= 1.25,
@@ -542,14 +573,19 @@ pub fn run(opts: Options) -> Result<()> {
     let start = match (&opts.material, &replay) {
         (Some(p), _) => Material::load(p)?,
         (None, Some(_)) => Material::scratch(),
-        (None, None) => match Material::load(&recovery) {
-            Ok(m) if recovery.exists() => {
-                eprintln!("brdf-shop: restored the unsaved material of the last session from {}", recovery.display());
-                m
-            }
-            _ => crate::brush::strokes::default_material()?,
-        },
+        (None, None) => crate::brush::strokes::default_material()?,
     };
+    // Unsaved work of an earlier session that did not end cleanly is offered back (R restores it).
+    let recovered = match (&opts.material, &replay) {
+        (None, None) if recovery.exists() => Material::load(&recovery).ok().filter(|m| *m != start),
+        _ => None,
+    };
+    if recovered.is_some() {
+        eprintln!(
+            "brdf-shop: unsaved work from the last session is in {}; press R in the window to restore it",
+            recovery.display()
+        );
+    }
     let event_loop = EventLoop::new().map_err(|e| {
         Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
     })?;
@@ -573,6 +609,7 @@ pub fn run(opts: Options) -> Result<()> {
         refine_sum: Vec::new(),
         refine_samples: 0,
         frame_ms: Vec::new(),
+        recovered,
     };
     event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
     if let Some(e) = app.error.take() {
