@@ -121,7 +121,7 @@ fn idle_frames_refine_the_mesh_view() {
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
-    assert!(spread(&img, (0, 0, 128, 144)) > 2.0);
+    assert!(spread(&img, (0, 0, 128, 144)) > 2.0, "the mesh view is empty");
 }
 
 /// Unsaved work is offered back, not forced: a start that finds a recovery file says so and keeps
@@ -160,4 +160,21 @@ fn recovery_file_is_offered_back() {
         [0.1, 0.2, 0.3],
         "the offer left the recovery file as it was"
     );
+}
+
+/// `brdf-shop` without arguments opens the editor where there is a display; without one it says so
+/// in one line and runs the headless demo instead of failing.
+#[test]
+fn no_arguments_without_a_display_runs_the_demo() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .current_dir(dir.path())
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("no display") && stderr.contains("brdf-shop edit"), "{stderr}");
+    assert!(dir.path().join("brdf-shop-demo/material.brdf.json").exists());
 }

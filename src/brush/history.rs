@@ -34,6 +34,13 @@ impl History {
         self.cursor = self.states.len() - 1;
     }
 
+    /// Replaces the current state without a new undo step (a slider still being dragged: the whole
+    /// drag is one step).
+    pub fn amend(&mut self, m: Material) {
+        self.states.truncate(self.cursor + 1);
+        self.states[self.cursor] = m;
+    }
+
     pub fn can_undo(&self) -> bool {
         self.cursor > 0
     }

@@ -163,7 +163,18 @@ pub fn parse() -> Result<Cli, ExitCode> {
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None => demo::run(&PathBuf::from("brdf-shop-demo")),
+        None => {
+            // The editor on the embedded defaults; without a display, the headless demo.
+            let display =
+                ["DISPLAY", "WAYLAND_DISPLAY"].iter().any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()));
+            if display {
+                let opts = brdf_shop::editor::Options { size: (1280, 720), ..Default::default() };
+                Ok(brdf_shop::editor::run(opts)?)
+            } else {
+                eprintln!("brdf-shop: no display (DISPLAY/WAYLAND_DISPLAY unset): running the headless demo; `brdf-shop edit` opens the editor");
+                demo::run(&PathBuf::from("brdf-shop-demo"))
+            }
+        }
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),

@@ -11,6 +11,7 @@
 //! file, which the next start loads when no `--material` is given.
 
 pub mod graph;
+pub mod panel;
 pub mod state;
 
 use std::collections::VecDeque;
@@ -75,6 +76,12 @@ pub fn save_recovery(m: &Material, path: &Path) -> Result<()> {
 }
 
 struct Gpu {
+    /// The egui painter; dropped first (it owns device objects).
+    ui: Option<egui_ash_renderer::Renderer>,
+    /// The frame as composed on the CPU with the panel drawn over it (`RGBA8`), blitted to the
+    /// swapchain and read back for screenshots.
+    target: Option<crate::vk::Image>,
+    readback: Option<Buffer>,
     swapchain: Option<Swapchain>,
     surface: Option<Surface>,
     staging: Option<Buffer>,
@@ -84,6 +91,15 @@ struct Gpu {
 
 impl Drop for Gpu {
     fn drop(&mut self) {
+        // SAFETY: nothing is in flight (every submission is waited on); the painter goes first.
+        let _ = unsafe { self.renderer.ctx.raw().device_wait_idle() };
+        drop(self.ui.take());
+        if let Some(i) = self.target.take() {
+            i.destroy(&self.renderer.ctx);
+        }
+        if let Some(b) = self.readback.take() {
+            b.destroy(&self.renderer.ctx);
+        }
         if let Some(s) = self.swapchain.take() {
             s.destroy(&self.renderer.ctx);
         }
@@ -120,6 +136,14 @@ struct App {
     frame_ms: Vec<f64>,
     /// The recovery file's material, offered until restored (R) or replaced by an edit.
     recovered: Option<Material>,
+    egui_ctx: egui::Context,
+    egui_state: Option<egui_winit::State>,
+    spp: u32,
+    /// The energy report of the material shown (recomputed when it changes).
+    report: Option<(Material, crate::brdf::energy::Report)>,
+    timings: Vec<(String, f64)>,
+    /// A panel widget was being dragged last frame: its edits amend one history step.
+    panel_dragging: bool,
 }
 
 /// Samples per pixel added by each refining frame, and where refinement stops.
@@ -154,7 +178,35 @@ impl App {
         renderer.set_mesh(&self.mesh)?;
         let surface = Surface::new(&renderer.ctx, display, handle)?;
         let size = window.inner_size();
-        let mut gpu = Gpu { swapchain: None, surface: Some(surface), staging: None, renderer, window };
+        let ui = egui_ash_renderer::Renderer::with_default_allocator(
+            &renderer.ctx.instance.raw,
+            renderer.ctx.device.physical,
+            renderer.ctx.device.raw.clone(),
+            egui_ash_renderer::DynamicRendering {
+                color_attachment_format: vk::Format::R8G8B8A8_UNORM,
+                depth_attachment_format: None,
+            },
+            egui_ash_renderer::Options { srgb_framebuffer: false, ..Default::default() },
+        )
+        .map_err(|e| Error::NoDevice(format!("the tool panel's painter: {e}")))?;
+        self.egui_state = Some(egui_winit::State::new(
+            self.egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &*window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(renderer.ctx.device.limits.max_image_dimension2_d as usize),
+        ));
+        let mut gpu = Gpu {
+            ui: Some(ui),
+            target: None,
+            readback: None,
+            swapchain: None,
+            surface: Some(surface),
+            staging: None,
+            renderer,
+            window,
+        };
         gpu.swapchain =
             Swapchain::new(&gpu.renderer.ctx, gpu.surface.as_ref().expect("made above"), (size.width, size.height))?;
         let (w, h) = gpu.swapchain.as_ref().map_or((size.width, size.height), |s| (s.extent.width, s.extent.height));
@@ -263,7 +315,7 @@ impl App {
         let mesh_settings = crate::render::Settings {
             width: l.mesh_w,
             height: l.height,
-            spp: 8,
+            spp: self.spp,
             estimator: Estimator::Fis,
             view: View::Mesh,
             camera: state.camera(),
@@ -273,7 +325,8 @@ impl App {
         // Any change shows the fast `fis` image and restarts the accumulation; while nothing changes,
         // each frame adds REFINE_STEP samples of `mis` (the true image, not the prefiltered blur).
         let key = format!("{m:?}{:?}{:?}{:?}", mesh_settings.camera, l, self.env.origin);
-        let mesh_frame = if key != self.refine_key {
+        let refining = !self.opts.quit || self.opts.converge;
+        let mesh_frame = if key != self.refine_key || !refining {
             self.refine_key = key;
             self.refine_samples = 0;
             self.refine_sum.clear();
@@ -326,7 +379,7 @@ impl App {
                 }
             }
         };
-        blit(&mut rgba, &mesh_frame.image, 0, self.exposure * auto_exposure(&self.env));
+        blit(&mut rgba, &mesh_frame.image, l.mesh_x as usize, self.exposure * auto_exposure(&self.env));
         blit(&mut rgba, &canvas_frame.image, l.canvas_x as usize, self.exposure);
         // The snap marker: the mirror point, where a new lobe needs no rotation (paper §3.3.1).
         if let Some((cu, cv)) = state.settings.canvas.mirror_point() {
@@ -356,41 +409,132 @@ impl App {
             self.last_ms,
             state.status
         ));
-        // The swapchain takes BGRA or RGBA.
-        let bgra = sc.format == vk::Format::B8G8R8A8_UNORM;
-        let mut bytes = rgba.clone();
-        if bgra {
-            for px in bytes.chunks_exact_mut(4) {
-                px.swap(0, 2);
-            }
+        self.timings = mesh_frame.timings.iter().chain(&canvas_frame.timings).map(|t| (t.name.clone(), t.ms)).collect();
+        // The tool panel: run egui on this frame's input, apply what the user did after drawing.
+        let report_stale = self.report.as_ref().is_none_or(|(rm, _)| *rm != m);
+        if report_stale {
+            self.report = Some((m.clone(), crate::brdf::energy::Report::measure(&m, 2_000, 20_000)));
         }
+        let quality = if self.refine_samples == 0 {
+            format!("mesh view: fis {} spp", self.spp)
+        } else {
+            format!("mesh view: mis {} spp", self.refine_samples)
+        };
+        let (mut spp, mut exposure, mut log_graph) = (self.spp, self.exposure, self.log_graph);
+        let egui_state = self.egui_state.as_mut().expect("made in init");
+        let raw_input = egui_state.take_egui_input(&gpu.window);
+        let info = panel::Info {
+            brush: state.brush,
+            split: state.settings.split_lobes,
+            report: self.report.as_ref().map(|r| &r.1),
+            timings: &self.timings,
+            quality: &quality,
+            status: &state.status,
+        };
+        let mut actions = panel::Actions::default();
+        let output = self.egui_ctx.run(raw_input, |ctx| {
+            actions = panel::show(ctx, &m, &info, &mut spp, &mut exposure, &mut log_graph);
+        });
+        egui_state.handle_platform_output(&gpu.window, output.platform_output);
+        let primitives = self.egui_ctx.tessellate(output.shapes, output.pixels_per_point);
+        (self.spp, self.exposure, self.log_graph) = (spp.max(1), exposure, log_graph);
         let ctx = &gpu.renderer.ctx;
-        if gpu.staging.as_ref().is_none_or(|b| b.size != bytes.len() as u64) {
+        let ui = gpu.ui.as_mut().expect("made in init");
+        ui.set_textures(ctx.device.queue, ctx.commands.pool, &output.textures_delta.set)
+            .map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
+        // The frame's pixels, the panel over them, then into the swapchain and the readback buffer.
+        let size = (w as u32, h as u32);
+        if gpu.target.as_ref().is_none_or(|t| (t.width, t.height) != size) {
+            if let Some(t) = gpu.target.take() {
+                t.destroy(ctx);
+            }
+            if let Some(b) = gpu.readback.take() {
+                b.destroy(ctx);
+            }
+            let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST;
+            gpu.target = Some(crate::vk::Image::new(ctx, size, vk::Format::R8G8B8A8_UNORM, 1, usage, "window.frame")?);
+            gpu.readback = Some(Buffer::new(
+                ctx,
+                (w * h * 4) as u64,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+                "window.readback",
+            )?);
+        }
+        if gpu.staging.as_ref().is_none_or(|b| b.size != rgba.len() as u64) {
             if let Some(b) = gpu.staging.take() {
                 b.destroy(ctx);
             }
             gpu.staging = Some(Buffer::new(
                 ctx,
-                bytes.len() as u64,
+                rgba.len() as u64,
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
                 "window.pixels",
             )?);
         }
         let staging = gpu.staging.as_mut().expect("made above");
-        staging.write(&bytes);
+        staging.write(&rgba);
+        let (target, readback, staging) =
+            (gpu.target.as_ref().expect("made above"), gpu.readback.as_ref().expect("made above"), &*staging);
+        let extent = vk::Extent2D { width: size.0, height: size.1 };
+        let scale = output.pixels_per_point;
+        let record = |cmd: vk::CommandBuffer, swap_image: vk::Image| -> Result<()> {
+            record_frame(ctx, cmd, (target, staging, readback), ui, (extent, scale, &primitives), swap_image)
+        };
         let fresh = match sc.acquire(ctx)? {
-            Acquired::Image(i) => sc.present_copy(ctx, i, staging)?,
+            Acquired::Image(i) => sc.present(ctx, i, record)?,
             Acquired::OutOfDate => false,
         };
+        ui.free_textures(&output.textures_delta.free)
+            .map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
         ctx.check_validation()?;
         if !fresh {
             if let Some(old) = gpu.swapchain.take() {
                 old.destroy(ctx);
             }
             gpu.window.request_redraw();
+        } else if let Some(b) = &gpu.readback {
+            let n = rgba.len();
+            rgba.copy_from_slice(&b.mapped()[..n]);
         }
+        self.apply_panel(actions)?;
         self.frame = Some(rgba);
+        Ok(())
+    }
+
+    /// Turns the panel's actions into state changes (material edits become history steps).
+    fn apply_panel(&mut self, a: panel::Actions) -> Result<()> {
+        if let Some(b) = a.brush {
+            self.handle(Input::Brush(b))?;
+        }
+        for (yes, input) in [
+            (a.toggle_split, Input::ToggleSplit),
+            (a.undo, Input::Undo),
+            (a.redo, Input::Redo),
+            (a.save, Input::Save),
+            (a.reset_light, Input::ResetLight),
+        ] {
+            if yes {
+                self.handle(input)?;
+            }
+        }
+        if let (Some((m, dragging)), Some(state)) = (a.material, self.state.as_mut()) {
+            if self.panel_dragging {
+                state.history.amend(m);
+            } else {
+                state.history.push(m);
+            }
+            self.panel_dragging = dragging;
+            save_recovery(state.material(), &recovery_path())?;
+            if let Some(g) = &self.gpu {
+                g.window.request_redraw();
+            }
+        } else {
+            self.panel_dragging = false;
+        }
         Ok(())
     }
 
@@ -424,6 +568,98 @@ fn auto_exposure(env: &Environment) -> f64 {
     }
 }
 
+/// Records one window frame: CPU pixels → `target`, the panel drawn over them, `target` blitted into
+/// the swapchain image (in `TRANSFER_DST_OPTIMAL`) and copied to `readback`.
+fn record_frame(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    (target, staging, readback): (&crate::vk::Image, &Buffer, &Buffer),
+    ui: &mut egui_ash_renderer::Renderer,
+    (extent, scale, primitives): (vk::Extent2D, f32, &[egui::ClippedPrimitive]),
+    swap_image: vk::Image,
+) -> Result<()> {
+    let raw = ctx.raw();
+    let none = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
+    let copy = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+    let colour = (
+        vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+        vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+    );
+    let read = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_READ);
+    let layers = vk::ImageSubresourceLayers {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        mip_level: 0,
+        base_array_layer: 0,
+        layer_count: 1,
+    };
+    let whole = vk::Extent3D { width: extent.width, height: extent.height, depth: 1 };
+    target.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL, none, copy);
+    let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(whole);
+    // SAFETY: `cmd` is recording; buffer and image hold a whole frame.
+    unsafe {
+        raw.cmd_copy_buffer_to_image(cmd, staging.raw, target.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+    };
+    target.barrier(
+        ctx,
+        cmd,
+        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        copy,
+        colour,
+    );
+    let attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(target.view)
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::LOAD)
+        .store_op(vk::AttachmentStoreOp::STORE)];
+    let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+    let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&attachment);
+    // SAFETY: the target is a colour attachment in the layout named.
+    unsafe { raw.cmd_begin_rendering(cmd, &info) };
+    let drawn =
+        ui.cmd_draw(cmd, extent, scale, primitives).map_err(|e| Error::NoDevice(format!("the tool panel: {e}")));
+    // SAFETY: rendering began above.
+    unsafe { raw.cmd_end_rendering(cmd) };
+    drawn?;
+    target.barrier(
+        ctx,
+        cmd,
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        colour,
+        read,
+    );
+    let corner = [vk::Offset3D::default(), vk::Offset3D { x: extent.width as i32, y: extent.height as i32, z: 1 }];
+    let blit = vk::ImageBlit::default()
+        .src_subresource(layers)
+        .src_offsets(corner)
+        .dst_subresource(layers)
+        .dst_offsets(corner);
+    // SAFETY: source in TRANSFER_SRC, destination (the acquired swapchain image) in TRANSFER_DST, same size.
+    unsafe {
+        raw.cmd_blit_image(
+            cmd,
+            target.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            swap_image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[blit],
+            vk::Filter::NEAREST,
+        );
+        raw.cmd_copy_image_to_buffer(cmd, target.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.raw, &[region]);
+    }
+    let b = [vk::BufferMemoryBarrier2::default()
+        .buffer(readback.raw)
+        .size(vk::WHOLE_SIZE)
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+    // SAFETY: `cmd` is recording.
+    unsafe { raw.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&b)) };
+    Ok(())
+}
+
 fn key_input(key: &Key, mods: ModifiersState) -> Option<Input> {
     let Key::Character(c) = key else { return None };
     let c = c.to_lowercase();
@@ -455,6 +691,23 @@ impl ApplicationHandler for App {
     }
 
     fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        // The tool panel sees every event first; what it takes does not reach the views.
+        if let (Some(es), Some(g)) = (self.egui_state.as_mut(), self.gpu.as_ref()) {
+            let r = es.on_window_event(&g.window, &event);
+            if r.repaint {
+                g.window.request_redraw();
+            }
+            let passes = matches!(
+                event,
+                WindowEvent::CloseRequested
+                    | WindowEvent::RedrawRequested
+                    | WindowEvent::Resized(_)
+                    | WindowEvent::ModifiersChanged(_)
+            );
+            if r.consumed && !passes {
+                return;
+            }
+        }
         let input = match event {
             WindowEvent::CloseRequested => {
                 self.done = true;
@@ -610,6 +863,12 @@ pub fn run(opts: Options) -> Result<()> {
         refine_samples: 0,
         frame_ms: Vec::new(),
         recovered,
+        egui_ctx: egui::Context::default(),
+        egui_state: None,
+        spp: 8,
+        report: None,
+        timings: Vec::new(),
+        panel_dragging: false,
     };
     event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
     if let Some(e) = app.error.take() {

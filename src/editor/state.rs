@@ -37,12 +37,16 @@ pub enum Input {
     Dropped(PathBuf),
 }
 
+/// The tool panel's width (left edge of the window), when the window is wide enough for it.
+pub const PANEL_WIDTH: u32 = 280;
+
 /// Where the views sit in the window (pixels).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Layout {
     pub width: u32,
     pub height: u32,
-    /// The mesh view: `(0, 0, mesh_w, height)`.
+    /// The mesh view: `(mesh_x, 0, mesh_w, height)`, right of the tool panel.
+    pub mesh_x: u32,
     pub mesh_w: u32,
     /// The canvas: a square of side `canvas` at `(canvas_x, 0)`.
     pub canvas_x: u32,
@@ -53,9 +57,11 @@ pub struct Layout {
 
 impl Layout {
     pub fn new(width: u32, height: u32) -> Layout {
-        let mesh_w = (width / 2).max(1);
-        let canvas = (width - mesh_w).min(height * 3 / 5).max(1);
-        Layout { width, height, mesh_w, canvas_x: mesh_w, canvas, graph_y: canvas.min(height) }
+        let mesh_x = if width >= 3 * PANEL_WIDTH { PANEL_WIDTH } else { 0 };
+        let mesh_w = ((width - mesh_x) / 2).max(1);
+        let canvas_x = mesh_x + mesh_w;
+        let canvas = width.saturating_sub(canvas_x).min(height * 3 / 5).max(1);
+        Layout { width, height, mesh_x, mesh_w, canvas_x, canvas, graph_y: canvas.min(height) }
     }
 
     /// Canvas coordinates `(cu, cv)` of a window point.
@@ -74,7 +80,7 @@ impl Layout {
     }
 
     pub fn in_mesh(&self, x: f64, y: f64) -> bool {
-        x >= 0.0 && x < self.mesh_w as f64 && y >= 0.0 && y < self.height as f64
+        x >= self.mesh_x as f64 && x < (self.mesh_x + self.mesh_w) as f64 && y >= 0.0 && y < self.height as f64
     }
 }
 

@@ -7,7 +7,7 @@ use super::{vk_err, Device};
 use crate::error::Result;
 
 pub struct Commands {
-    pool: vk::CommandPool,
+    pub pool: vk::CommandPool,
     pub buffer: vk::CommandBuffer,
     fence: vk::Fence,
 }

@@ -5,7 +5,7 @@
 use ash::vk;
 
 use super::surface::Surface;
-use super::{vk_err, Buffer, Context};
+use super::{vk_err, Context};
 use crate::error::{Error, Result};
 
 pub struct Swapchain {
@@ -119,52 +119,48 @@ impl Swapchain {
         }
     }
 
-    /// Copies `pixels` (tightly packed, the swapchain's format and extent) into image `index` and
+    /// Lets `record` write image `index` (in `TRANSFER_DST_OPTIMAL`, by copies or blits) and
     /// presents it; false when the swapchain turned out of date or suboptimal.
-    pub fn present_copy(&self, ctx: &Context, index: u32, pixels: &Buffer) -> Result<bool> {
+    pub fn present(
+        &self,
+        ctx: &Context,
+        index: u32,
+        record: impl FnOnce(vk::CommandBuffer, vk::Image) -> Result<()>,
+    ) -> Result<bool> {
         let image = self.images[index as usize];
         let range = super::image::range(vk::ImageAspectFlags::COLOR, 1);
-        let barrier = |from, to, src, dst| super::image::transition(image, range, (from, to), src, dst);
+        let copy = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+        let none = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
         ctx.commands.run(&ctx.device, |cmd| {
-            let copy = (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE);
-            let b = [barrier(
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+            let before = [super::image::transition(
+                image,
+                range,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                none,
                 copy,
             )];
-            let region = vk::BufferImageCopy::default()
-                .image_subresource(vk::ImageSubresourceLayers {
-                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                    mip_level: 0,
-                    base_array_layer: 0,
-                    layer_count: 1,
-                })
-                .image_extent(vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 });
-            let b2 = [barrier(
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                copy,
-                (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
-            )];
-            // SAFETY: `cmd` is recording; the image was acquired; the buffer holds a whole image.
+            // SAFETY: `cmd` is recording; the image was acquired.
             unsafe {
-                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b));
-                ctx.raw().cmd_copy_buffer_to_image(
-                    cmd,
-                    pixels.raw,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[region],
-                );
-                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b2));
-            }
+                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&before))
+            };
+            record(cmd, image)?;
+            let after = [super::image::transition(
+                image,
+                range,
+                (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                copy,
+                none,
+            )];
+            // SAFETY: as above.
+            unsafe {
+                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&after))
+            };
             Ok(())
         })?;
         let swapchains = [self.raw];
         let indices = [index];
         let info = vk::PresentInfoKHR::default().swapchains(&swapchains).image_indices(&indices);
-        // SAFETY: the copy completed (`run` waited); the image is in PRESENT_SRC.
+        // SAFETY: the writes completed (`run` waited); the image is in PRESENT_SRC.
         match unsafe { self.loader.queue_present(ctx.device.queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
