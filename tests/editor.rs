@@ -178,3 +178,51 @@ fn no_arguments_without_a_display_runs_the_demo() {
     assert!(stderr.contains("no display") && stderr.contains("brdf-shop edit"), "{stderr}");
     assert!(dir.path().join("brdf-shop-demo/material.brdf.json").exists());
 }
+
+/// The input logic without a window: strokes through synthesised inputs, undo/redo, the light drag
+/// and its reset, orbit only on the mesh view, and the layout's canvas mapping.
+#[test]
+fn state_handles_inputs_like_the_window() {
+    use brdf_shop::brush::strokes::{default_strokes, BrushKind};
+    use brdf_shop::editor::state::{stroke_inputs, Input, Layout, State};
+    let strokes = default_strokes().unwrap();
+    let settings = strokes.settings("test").unwrap();
+    let layout = Layout::new(1280, 720);
+    // Canvas coordinates survive the trip through window pixels to 1e-12.
+    let (x, y) = layout.canvas_point(0.62, 0.35);
+    let (cu, cv) = layout.canvas_coords(x, y);
+    assert!((cu - 0.62).abs() < 1e-12 && (cv - 0.35).abs() < 1e-12);
+    assert!(layout.in_canvas(x, y) && !layout.in_mesh(x, y));
+    let mut s = State::new(Material::scratch(), settings, layout);
+    for st in &strokes.strokes {
+        for i in stroke_inputs(&s.layout, st) {
+            s.handle(i);
+        }
+    }
+    let painted = strokes.replay(&Material::scratch(), "test").unwrap();
+    assert!(same_material(s.material(), &painted));
+    assert!(s.handle(Input::Undo).material_changed);
+    assert!(!same_material(s.material(), &painted));
+    assert!(s.handle(Input::Redo).material_changed);
+    assert!(same_material(s.material(), &painted));
+    // Right-drag on the canvas moves the light to the normal under the cursor; reset brings it back.
+    let before = s.settings.canvas.light;
+    let (lx, ly) = s.layout.canvas_point(0.5, 0.5);
+    s.handle(Input::CursorMoved(lx, ly));
+    s.handle(Input::Button { pressed: true, right: true });
+    s.handle(Input::Button { pressed: false, right: true });
+    assert!(s.light_moved && (s.settings.canvas.light - glam::DVec3::Z).length() < 1e-9);
+    s.handle(Input::ResetLight);
+    assert!(!s.light_moved && s.settings.canvas.light == before);
+    // Dragging on the mesh view orbits; a brush key changes the brush, not the material.
+    let yaw = s.yaw;
+    let (mx, my) = (s.layout.mesh_x as f64 + 50.0, 300.0);
+    s.handle(Input::CursorMoved(mx, my));
+    s.handle(Input::Button { pressed: true, right: false });
+    s.handle(Input::CursorMoved(mx + 40.0, my));
+    s.handle(Input::Button { pressed: false, right: false });
+    assert!(s.yaw != yaw);
+    assert!(same_material(s.material(), &painted), "orbiting changed the material");
+    s.handle(Input::Brush(BrushKind::Streak));
+    assert_eq!(s.brush, BrushKind::Streak);
+}

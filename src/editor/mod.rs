@@ -311,6 +311,12 @@ impl App {
             state.handle(Input::Resized(w, h));
         }
         let l = state.layout;
+        // The canvas light follows the environment's brightest direction seen from the orbiting
+        // camera, unless the user moved it (a replay keeps its strokes file's light).
+        if !state.light_moved && self.replay.is_none() {
+            state.default_light = light_from(&self.env, &state.camera());
+            state.settings.canvas.light = state.default_light;
+        }
         let m = state.material().clone();
         let mesh_settings = crate::render::Settings {
             width: l.mesh_w,

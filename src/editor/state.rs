@@ -121,6 +121,9 @@ pub struct State {
     pub fov_deg: f64,
     /// The light the canvas starts with (the environment's brightest direction seen by the camera).
     pub default_light: DVec3,
+    /// The user moved the canvas light (right button); until reset, it stays where they put it
+    /// instead of following the environment's brightest direction as the camera orbits.
+    pub light_moved: bool,
     cursor: (f64, f64),
     drag: Drag,
     pub status: String,
@@ -140,6 +143,7 @@ impl State {
             distance: DEFAULT_DISTANCE,
             fov_deg: 30.0,
             default_light,
+            light_moved: false,
             cursor: (0.0, 0.0),
             drag: Drag::None,
             status: String::new(),
@@ -243,6 +247,7 @@ impl State {
             }
             Input::ResetLight => {
                 self.settings.canvas.light = self.default_light;
+                self.light_moved = false;
                 fx.redraw = true;
             }
             Input::FrameView => {
@@ -265,6 +270,7 @@ impl State {
         match normal_at(cu, cv).and_then(|n| Canvas::new(n, self.settings.canvas.intensity)) {
             Some(c) => {
                 self.settings.canvas = c;
+                self.light_moved = true;
                 true
             }
             None => false,
