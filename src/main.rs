@@ -17,6 +17,7 @@ fn main() -> ExitCode {
     };
     match cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<cli::NotPhysicallyCorrect>().is_some() => ExitCode::from(3),
         Err(e) => {
             let user = e.chain().any(|c| c.downcast_ref::<brdf_shop::Error>().is_some_and(|e| e.is_user_error()))
                 || e.downcast_ref::<cli::UsageError>().is_some();

@@ -52,8 +52,10 @@ fn create_peaks_at_the_clicked_point() {
     for light in LIGHTS {
         for split in [false, true] {
             let s = settings(light, split);
-            for click in CLICKS {
-                let Ok((m, k)) = brushes::create(&Material::scratch(), &s, click) else {
+            for (click, start) in
+                CLICKS.into_iter().flat_map(|c| [(c, Material::scratch()), (c, Material::scratch_paper())])
+            {
+                let Ok((m, k)) = brushes::create(&start, &s, click) else {
                     continue; // refused where n·L ≤ 0; tested below
                 };
                 let img = s.canvas.image(&lobe_only(&m, k), SIZE);
@@ -98,8 +100,15 @@ const DRAGS: [((f64, f64), (f64, f64)); 4] = [
     ((0.62, 0.35), (0.60, 0.32)),
 ];
 
-/// `radiance(brush) / max radiance` of lobe `k` on the 512² image.
+/// `radiance(brush) / max radiance` of lobe `k` on the 512² image: of the highlight the brush acts on,
+/// so a split reciprocal lobe counts its first facet alone (its other face lights a second highlight
+/// of a different brightness elsewhere).
 fn image_ratio(s: &Settings, m: &Material, k: usize, brush: (f64, f64)) -> f64 {
+    let mut m = m.clone();
+    if m.normalization == brdf_shop::brdf::Normalization::Reciprocal {
+        m.lobes[k].split = false;
+    }
+    let m = &m;
     let img = s.canvas.image(&lobe_only(m, k), SIZE);
     let (_, peak) = argmax(&img, None);
     let at = s.canvas.radiance(&lobe_only(m, k), brush.0, brush.1)[0];
@@ -108,10 +117,13 @@ fn image_ratio(s: &Settings, m: &Material, k: usize, brush: (f64, f64)) -> f64 {
 
 #[test]
 fn modify_puts_the_brush_at_gamma_of_the_peak() {
-    for split in [false, true] {
+    // Both constructions: the reciprocal default and the paper's, split and not.
+    for (split, start) in
+        [false, true].into_iter().flat_map(|sp| [(sp, Material::scratch()), (sp, Material::scratch_paper())])
+    {
         let s = settings([0.3, 0.4, 0.866], split);
         for (click, brush) in DRAGS {
-            let (m, k) = brushes::create(&Material::scratch(), &s, click).unwrap();
+            let (m, k) = brushes::create(&start, &s, click).unwrap();
             let m = brushes::modify(&m, &s, k, brush).unwrap();
             let l = &m.lobes[k];
             assert_eq!(l.alpha_x, l.alpha_y);
@@ -177,7 +189,8 @@ fn eq3_option_follows_its_formula() {
     for rule in [ModifyRule::Eq3, ModifyRule::Eq3Printed] {
         s.modify_rule = rule;
         for (click, brush) in DRAGS {
-            let (m, k) = brushes::create(&Material::scratch(), &s, click).unwrap();
+            // Eq. 3 is the paper's formula for its rotated views.
+            let (m, k) = brushes::create(&Material::scratch_paper(), &s, click).unwrap();
             let out = brushes::modify(&m, &s, k, brush).unwrap();
             // Recompute eq. 3 from the canvas geometry here: n at the brush, its frame, ω_r, R ω_o.
             let (x, y) = (2.0 * brush.0 - 1.0, 1.0 - 2.0 * brush.1);

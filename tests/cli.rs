@@ -161,7 +161,30 @@ fn material_wrong_format() {
 
 #[test]
 fn material_wrong_version() {
-    assert_material_refused(&edited(|m| m["version"] = json!(2)), &["version", "2"]);
+    assert_material_refused(&edited(|m| m["version"] = json!(3)), &["version", "3"]);
+}
+
+/// Version 2's `model` (README changelog): the reciprocal model refuses the paper's fields, version 1
+/// refuses `model`, and "reciprocal" is not a normalisation.
+#[test]
+fn material_model_fields() {
+    let v2 = |f: &dyn Fn(&mut Value)| {
+        edited(|m| {
+            m["version"] = json!(2);
+            f(m)
+        })
+    };
+    assert_material_refused(&v2(&|m| m["model"] = json!("reciprocal")), &["normalization", "paper"]);
+    assert_material_refused(
+        &v2(&|m| {
+            m["model"] = json!("reciprocal");
+            m.as_object_mut().unwrap().remove("normalization");
+        }),
+        &["symmetrize"],
+    );
+    assert_material_refused(&edited(|m| m["model"] = json!("paper")), &["model", "version"]);
+    assert_material_refused(&edited(|m| m["normalization"] = json!("reciprocal")), &["normalization", "model"]);
+    assert_material_refused(&v2(&|m| m["model"] = json!("tilted")), &["model"]);
 }
 
 #[test]
@@ -471,17 +494,24 @@ fn help() {
 // ---------------------------------------------------------------------------------------------------
 // `check` (SPEC §2 "Energy", §4).
 
-/// Runs `check` with the fast budgets on `material`, plus `extra` flags; asserts success.
+/// Runs `check` with the fast budgets on `material`, plus `extra` flags; asserts it ran: exit 0 for a
+/// physically correct material, 3 for one that loads but is not (the verdict says which).
 fn check_ok(material: &Value, extra: &[&str]) -> String {
+    let (code, stdout) = check_code(material, extra);
+    let correct = stdout.contains("verdict: physically correct") || stdout.contains("\"physically_correct\": true");
+    assert_eq!(code, if correct { 0 } else { 3 }, "{stdout}");
+    stdout
+}
+
+fn check_code(material: &Value, extra: &[&str]) -> (i32, String) {
     let dir = tmp();
     let path = write(dir.path(), "m.brdf.json", &material.to_string());
     let mut args = vec!["check", "--material", s(&path)];
     args.extend_from_slice(&FAST);
     args.extend_from_slice(extra);
     let (code, stdout, stderr) = brdf_shop(&args, None);
-    assert_eq!(code, 0, "{stderr}");
     assert!(stderr.is_empty(), "{stderr}");
-    stdout
+    (code, stdout)
 }
 
 #[test]
@@ -500,8 +530,10 @@ fn rough_ward() -> Value {
 
 #[test]
 fn check_warns_about_rough_ward() {
-    let out = check_ok(&rough_ward(), &[]);
+    let (code, out) = check_code(&rough_ward(), &[]);
     assert!(out.lines().any(|l| l.contains("warning")), "{out}");
+    assert_eq!(code, 3, "{out}");
+    assert!(out.contains("verdict: not physically correct: reflects more than it receives"), "{out}");
 }
 
 #[test]

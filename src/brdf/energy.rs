@@ -10,7 +10,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::material::Material;
-use super::sampling::MaterialSampler;
+use super::sampling::{self, MaterialSampler};
+use super::ward::Normalization;
 use crate::rng::Pcg32;
 
 /// A Monte Carlo estimate per channel with its standard error.
@@ -88,6 +89,67 @@ pub fn max_directional_albedo(m: &Material, n: usize) -> MaxAlbedo {
         })
 }
 
+/// Cells per side of the deterministic quadrature of a reciprocal lobe's albedo.
+pub const FACET_GRID: usize = 128;
+
+/// `∫ F cos θ_i dω_i` of one facet term of a reciprocal lobe at `ω_o`, per unit albedo, by the
+/// product midpoint rule on the sampler's unit square (`n × n` cells). The sampler maps the square
+/// onto the facet distribution preserving measure, and the integrand there is the closed-form weight
+/// `cos θ_i / max(cos θ_i, cos θ_o) ∈ [0, 1]` (0 where the reflected direction leaves the
+/// hemisphere), so the exact value lies in [0, 1] and this deterministic rule cannot exceed 1.
+pub fn facet_term_albedo(shape: &super::ward::Shape<f64>, frame: glam::DQuat, wo: DVec3, n: usize) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..n {
+        let u1 = (i as f64 + 0.5) / n as f64;
+        for j in 0..n {
+            let u2 = (j as f64 + 0.5) / n as f64;
+            if let Some(wi) = sampling::sample_facet(shape, frame, wo, u1, u2) {
+                sum += sampling::facet_weight(wi, wo);
+            }
+        }
+    }
+    sum / (n * n) as f64
+}
+
+/// `a(ω_o)` per channel of a reciprocal material by [`facet_term_albedo`] (`n × n` cells per facet
+/// term): `ρ_d + Σ_k ρ_k · mean over its facet terms`.
+pub fn facet_albedo(m: &Material, wo: DVec3, n: usize) -> [f64; 3] {
+    let mut a = m.diffuse;
+    for l in &m.lobes {
+        let (frames, count) = l.facet_frames();
+        let shape = l.shape();
+        let t: f64 = frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64;
+        for c in 0..3 {
+            a[c] += l.albedo[c] * t;
+        }
+    }
+    a
+}
+
+/// The maximum directional albedo of a reciprocal material over [`THETA_SET_DEG`] × 12 azimuths by
+/// deterministic quadrature ([`FACET_GRID`]² cells per term). `std_err` carries the quadrature's
+/// error estimate at the maximum, `|A(n) − A(n/2)|`.
+pub fn facet_max_albedo(m: &Material) -> MaxAlbedo {
+    let dirs: Vec<(f64, f64)> =
+        THETA_SET_DEG.iter().flat_map(|&t| (0..12).map(move |i| (t, i as f64 * 30.0))).collect();
+    let best = dirs
+        .par_iter()
+        .map(|&(t, p)| {
+            let a = facet_albedo(m, direction(t.to_radians(), p.to_radians()), FACET_GRID);
+            let c = (1..3).fold(0, |best, c| if a[c] > a[best] { c } else { best });
+            MaxAlbedo { value: a[c], std_err: 0.0, channel: c, theta_deg: t, phi_deg: p }
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold(None::<MaxAlbedo>, |a, b| match a {
+            Some(a) if a.value >= b.value => Some(a),
+            _ => Some(b),
+        })
+        .expect("the view set is not empty");
+    let coarse = facet_albedo(m, direction(best.theta_deg.to_radians(), best.phi_deg.to_radians()), FACET_GRID / 2);
+    MaxAlbedo { std_err: (best.value - coarse[best.channel]).abs(), ..best }
+}
+
 /// Uniform direction on the upper hemisphere.
 fn uniform_hemisphere(u1: f64, u2: f64) -> DVec3 {
     let z = u1;
@@ -151,26 +213,89 @@ pub fn reciprocity_error(m: &Material, n: usize, seed: u64) -> f64 {
     reciprocity(m, n, seed).max_rel
 }
 
+/// What the albedo bound of a report rests on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlbedoBound {
+    /// The reciprocal form: `a(ω_o) ≤ ρ_d + Σρ_k` for every `ω_o` by construction (the integrand of
+    /// every facet term is at most 1 against a normalised distribution), so the bound is the largest
+    /// channel sum, exact to the rounding of that sum ([`BOUND_ROUNDING`]). `max_albedo` is then a
+    /// deterministic quadrature of the actual maximum, with its error estimate in `std_err`.
+    Exact,
+    /// The paper's forms: only the Monte Carlo maximum (± 3σ in `max_albedo`) says anything.
+    Measured,
+}
+
+/// Relative rounding error of the exact bound: the sum of at most a few thousand terms in `f64`.
+pub const BOUND_ROUNDING: f64 = 1.0e-12;
+
 /// Everything `brdf-shop check` and the editor's energy readout show.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Report {
     /// `ρ_d + Σρ_k` per channel.
     pub sums: [f64; 3],
+    pub bound: AlbedoBound,
     pub max_albedo: MaxAlbedo,
     pub reciprocity: Reciprocity,
 }
 
+/// Reciprocity error below which a material counts as exactly reciprocal (issue: 1e-12).
+pub const RECIPROCITY_EXACT: f64 = 1.0e-12;
+
 impl Report {
     pub fn measure(m: &Material, samples: usize, pairs: usize) -> Report {
+        let exact = m.normalization == Normalization::Reciprocal;
         Report {
             sums: m.energy_sums(),
-            max_albedo: max_directional_albedo(m, samples),
+            bound: if exact { AlbedoBound::Exact } else { AlbedoBound::Measured },
+            max_albedo: if exact { facet_max_albedo(m) } else { max_directional_albedo(m, samples) },
             reciprocity: reciprocity(m, pairs, 1),
         }
     }
 
-    /// Whether the measured albedo exceeds 1 by more than three standard errors.
+    /// The upper bound of the maximum directional albedo: the largest channel sum for the reciprocal
+    /// form, the measured maximum + 3σ otherwise.
+    pub fn albedo_upper_bound(&self) -> f64 {
+        match self.bound {
+            AlbedoBound::Exact => self.sums.iter().copied().fold(0.0, f64::max),
+            AlbedoBound::Measured => self.max_albedo.value + 3.0 * self.max_albedo.std_err,
+        }
+    }
+
+    /// Whether the albedo exceeds 1: for the paper's forms, the measurement by more than three
+    /// standard errors; for the reciprocal form, the exact bound.
     pub fn albedo_exceeds_one(&self) -> bool {
-        self.max_albedo.value - 3.0 * self.max_albedo.std_err > 1.0
+        match self.bound {
+            AlbedoBound::Exact => self.albedo_upper_bound() > 1.0 + super::material::ENERGY_SLACK,
+            AlbedoBound::Measured => self.max_albedo.value - 3.0 * self.max_albedo.std_err > 1.0,
+        }
+    }
+
+    pub fn is_reciprocal(&self) -> bool {
+        self.reciprocity.max_rel <= RECIPROCITY_EXACT
+    }
+
+    /// Reciprocal and bounded: what "physically correct" promises.
+    pub fn is_physically_correct(&self) -> bool {
+        self.is_reciprocal()
+            && !self.albedo_exceeds_one()
+            && self.albedo_upper_bound() <= 1.0 + super::material::ENERGY_SLACK
+    }
+
+    /// A plain verdict: "physically correct", or what breaks it.
+    pub fn verdict(&self) -> String {
+        let mut broken = Vec::new();
+        if !self.is_reciprocal() {
+            broken.push(format!("not reciprocal (error {:.3e} > {RECIPROCITY_EXACT:e})", self.reciprocity.max_rel));
+        }
+        if self.albedo_exceeds_one() {
+            broken.push(format!("reflects more than it receives (albedo {:.4} > 1)", self.max_albedo.value));
+        } else if self.albedo_upper_bound() > 1.0 + super::material::ENERGY_SLACK {
+            broken.push(format!("albedo not bounded by 1 within the measurement ({:.4} + 3σ)", self.max_albedo.value));
+        }
+        if broken.is_empty() {
+            "physically correct".into()
+        } else {
+            format!("not physically correct: {}", broken.join("; "))
+        }
     }
 }

@@ -1,7 +1,11 @@
 //! The material file of SPEC §3 (`*.brdf.json`): parsing with every refusal naming the field and the
 //! reason, validation (ranges, unit quaternions, the energy bound), and serialisation.
 //!
-//! Unknown fields are refused. A missing `normalization` means `"ward"` (the paper's eq. 1); missing
+//! Unknown fields are refused. Version 2 (what this program writes) adds `"model"`: `"reciprocal"`
+//! (the default: the reciprocal, energy-bounded facet lobes; `rotation` is the facet frame `Q`,
+//! `normalization` and `symmetrize` are not allowed) or `"paper"` (the paper's rotated views, with
+//! `normalization` and `symmetrize` as in version 1). Version-1 files have no `model` and mean the
+//! paper's construction. A missing `normalization` means `"ward"` (the paper's eq. 1); missing
 //! `symmetrize`, `tangent_angle`, `rotation` and `split` mean `false`, 0, identity and `false`.
 
 use std::path::Path;
@@ -14,7 +18,15 @@ use super::ward::Normalization;
 use crate::error::{Error, Result};
 
 pub const MATERIAL_FORMAT: &str = "brdf-shop/material";
-pub const MATERIAL_VERSION: u32 = 1;
+pub const MATERIAL_VERSION: u32 = 2;
+
+/// The construction a version-2 file's lobes follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum Model {
+    Reciprocal,
+    Paper,
+}
 
 fn identity() -> [f64; 4] {
     [1.0, 0.0, 0.0, 0.0]
@@ -40,11 +52,45 @@ struct MaterialFile {
     format: String,
     version: u32,
     diffuse: [f64; 3],
-    #[serde(default)]
-    normalization: Normalization,
-    #[serde(default)]
-    symmetrize: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    model: Option<Model>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    normalization: Option<Normalization>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    symmetrize: Option<bool>,
     lobes: Vec<LobeFile>,
+}
+
+/// The normalisation and `symmetrize` a file means, by version (see the module note).
+fn model_of(origin: &str, f: &MaterialFile) -> Result<(Normalization, bool)> {
+    let symmetrize = f.symmetrize.unwrap_or(false);
+    if f.normalization == Some(Normalization::Reciprocal) {
+        return Err(Error::input(
+            origin,
+            "normalization: \"reciprocal\" is not a normalisation; version 2 says \"model\": \"reciprocal\"",
+        ));
+    }
+    match (f.version, f.model) {
+        (1, Some(_)) => {
+            Err(Error::input(origin, "model: needs \"version\": 2 (version 1 means the paper's construction)"))
+        }
+        (1, None) | (_, Some(Model::Paper)) => Ok((f.normalization.unwrap_or_default(), symmetrize)),
+        (_, None | Some(Model::Reciprocal)) => {
+            if f.normalization.is_some() {
+                return Err(Error::input(
+                    origin,
+                    "normalization: only for \"model\": \"paper\" (the reciprocal model has its own normalisation)",
+                ));
+            }
+            if f.symmetrize.is_some() {
+                return Err(Error::input(
+                    origin,
+                    "symmetrize: only for \"model\": \"paper\" (the reciprocal model is exactly reciprocal already)",
+                ));
+            }
+            Ok((Normalization::Reciprocal, false))
+        }
+    }
 }
 
 /// Parses JSON into `T`, naming the path of the field that failed (`lobes[0].alpha_x: …`).
@@ -68,14 +114,16 @@ pub(crate) fn parse_json<'de, T: Deserialize<'de>>(text: &'de str, origin: &str)
     Ok(value)
 }
 
-pub(crate) fn check_format(origin: &str, format: &str, want: &str, version: u32) -> Result<()> {
+/// Checks the `format` tag and that `version` is one of `1..=newest`.
+pub(crate) fn check_format(origin: &str, format: &str, want: &str, version: u32, newest: u32) -> Result<()> {
     if format != want {
         return Err(Error::input(origin, format!("format: expected \"{want}\", got \"{format}\"")));
     }
-    if version != 1 {
+    if !(1..=newest).contains(&version) {
+        let reads = if newest == 1 { "version 1".to_owned() } else { format!("versions 1 to {newest}") };
         return Err(Error::input(
             origin,
-            format!("version: unsupported version {version} (this program reads version 1)"),
+            format!("version: unsupported version {version} (this program reads {reads})"),
         ));
     }
     Ok(())
@@ -122,7 +170,8 @@ impl Material {
     /// Parses and validates a material file's text.
     pub fn from_json(text: &str, origin: &str) -> Result<Material> {
         let f: MaterialFile = parse_json(text, origin)?;
-        check_format(origin, &f.format, MATERIAL_FORMAT, f.version)?;
+        check_format(origin, &f.format, MATERIAL_FORMAT, f.version, MATERIAL_VERSION)?;
+        let (normalization, symmetrize) = model_of(origin, &f)?;
         let mut lobes = Vec::with_capacity(f.lobes.len());
         for (k, l) in f.lobes.into_iter().enumerate() {
             let [w, x, y, z] = l.rotation;
@@ -146,7 +195,7 @@ impl Material {
                 split: l.split,
             });
         }
-        let m = Material { diffuse: f.diffuse, normalization: f.normalization, symmetrize: f.symmetrize, lobes };
+        let m = Material { diffuse: f.diffuse, normalization, symmetrize, lobes };
         m.validate(origin)?;
         Ok(m)
     }
@@ -159,12 +208,14 @@ impl Material {
 
     /// The file's JSON text (pretty, full `f64` precision: it reads back bit for bit).
     pub fn to_json(&self) -> String {
+        let reciprocal = self.normalization == Normalization::Reciprocal;
         let f = MaterialFile {
             format: MATERIAL_FORMAT.into(),
             version: MATERIAL_VERSION,
             diffuse: self.diffuse,
-            normalization: self.normalization,
-            symmetrize: self.symmetrize,
+            model: Some(if reciprocal { Model::Reciprocal } else { Model::Paper }),
+            normalization: (!reciprocal).then_some(self.normalization),
+            symmetrize: (!reciprocal).then_some(self.symmetrize),
             lobes: self
                 .lobes
                 .iter()

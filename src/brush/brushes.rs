@@ -8,7 +8,7 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::canvas::{Canvas, Site};
-use crate::brdf::{Lobe, Material, ALPHA_MAX, ALPHA_MIN};
+use crate::brdf::{Lobe, Material, Normalization, ALPHA_MAX, ALPHA_MIN};
 use crate::error::{Error, Result};
 
 /// How the modify brush turns a brush distance into a roughness.
@@ -125,6 +125,9 @@ pub fn create(m: &Material, s: &Settings, p: (f64, f64)) -> Result<(Material, us
     let snapped = s.canvas.mirror_point().is_some_and(|mp| (mp.0 - p.0).hypot(mp.1 - p.1) < s.snap_radius);
     let rotation = if snapped {
         DQuat::IDENTITY
+    } else if m.normalization == Normalization::Reciprocal {
+        // The facet that mirrors L into the viewer here: m = normalize(L + ω_o) in the local frame.
+        DQuat::from_rotation_arc(DVec3::Z, (site.wi + site.wo).normalize()).normalize()
     } else {
         let wr = 2.0 * site.wi.z * DVec3::Z - site.wi; // reflect(L, n) in the local frame
         DQuat::from_rotation_arc(site.wo, wr.normalize()).normalize()
@@ -170,8 +173,15 @@ fn solve_alpha(gamma: f64, ratio: impl Fn(f64) -> f64) -> f64 {
     best.1
 }
 
-/// `radiance(p) / peak` of lobe `k` (per unit albedo, so the ratio is colour-free).
+/// `radiance(p) / peak` of lobe `k` (per unit albedo, so the ratio is colour-free). For a split
+/// reciprocal lobe, of the highlight the brush acts on: its first facet term alone (the V-groove's
+/// other face lights a second highlight of its own brightness elsewhere on the canvas).
 fn peak_ratio(m: &Material, canvas: &Canvas, k: usize, p: (f64, f64)) -> f64 {
+    if m.normalization == Normalization::Reciprocal && m.lobes[k].split {
+        let mut one = m.clone();
+        one.lobes[k].split = false;
+        return peak_ratio(&one, canvas, k, p);
+    }
     let at = canvas.lobe_ln_radiance(m, k, p.0, p.1);
     match canvas.lobe_peak(m, k) {
         Some(peak) if at > f64::NEG_INFINITY => (at - peak.ln_value).exp().min(1.0),
@@ -199,8 +209,15 @@ pub fn modify(m: &Material, s: &Settings, k: usize, p: (f64, f64)) -> Result<Mat
             peak_ratio(&t, &s.canvas, k, p)
         }),
         rule => {
-            let wr = 2.0 * site.wi.z * DVec3::Z - site.wi;
-            let c = wr.dot(m.lobes[k].rotation * site.wo);
+            let c = if m.normalization == Normalization::Reciprocal {
+                // The angle between the mirror directions of the facet and of the brush's half vector
+                // is twice the angle between the two: ω_r · R ω_o's counterpart is cos 2θ.
+                let h = m.lobes[k].half_vector(m.normalization, site.wi, site.wo).unwrap_or(DVec3::Z);
+                2.0 * h.z * h.z - 1.0
+            } else {
+                let wr = 2.0 * site.wi.z * DVec3::Z - site.wi;
+                wr.dot(m.lobes[k].rotation * site.wo)
+            };
             if !(c > 0.0) {
                 return Err(Error::Brush(format!(
                     "eq. 3 is undefined at point {}: ω_r · R ω_o = {c:.4} ≤ 0",
@@ -232,7 +249,7 @@ pub fn streak(m: &Material, s: &Settings, k: usize, p: (f64, f64)) -> Result<Mat
     let lobe = &m.lobes[k];
     // The half vector the lobe sees at the brush; aligning x̂ with its tangential part puts the brush
     // on the streak's axis (h·ŷ = 0 there), whatever αx becomes.
-    let h = (site.wi + lobe.rotation * site.wo).normalize();
+    let h = lobe.half_vector(m.normalization, site.wi, site.wo).unwrap_or(DVec3::Z);
     if h.x.hypot(h.y) < 1e-12 {
         return Err(Error::Brush(format!(
             "point {} is the highlight's centre: drag away from it to streak",

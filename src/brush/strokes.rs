@@ -82,7 +82,7 @@ pub struct Strokes {
 impl Strokes {
     pub fn from_json(text: &str, origin: &str) -> Result<Strokes> {
         let s: Strokes = parse_json(text, origin)?;
-        check_format(origin, &s.format, STROKES_FORMAT, s.version)?;
+        check_format(origin, &s.format, STROKES_FORMAT, s.version, 1)?;
         s.settings(origin)?;
         for (i, st) in s.strokes.iter().enumerate() {
             if st.points.is_empty() {

@@ -3,33 +3,55 @@
 
 use std::path::Path;
 
-use brdf_shop::brdf::energy::Report;
-use brdf_shop::brdf::Material;
+use brdf_shop::brdf::energy::{AlbedoBound, Report, BOUND_ROUNDING, FACET_GRID};
+use brdf_shop::brdf::{Material, Normalization};
 
-use super::UsageError;
+use super::{NotPhysicallyCorrect, UsageError};
 
 const CHANNELS: [&str; 3] = ["red", "green", "blue"];
 
 /// The report as text lines.
 pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> String {
     let a = &r.max_albedo;
+    let model = if m.normalization == Normalization::Reciprocal {
+        "model: reciprocal".to_owned()
+    } else {
+        format!("model: paper, normalization: {}, symmetrize: {}", m.normalization.name(), m.symmetrize)
+    };
+    let albedo = match r.bound {
+        AlbedoBound::Exact => format!(
+            "albedo bound: max directional albedo ≤ {:.6} (exact: diffuse + Σ lobe albedos of the reciprocal model, \
+             rounding ≤ {BOUND_ROUNDING:e} relative)\n\
+             maximum directional albedo: {:.4} (deterministic quadrature, {FACET_GRID}² cells per term, error estimate {:.1e}) \
+             in the {} channel at θ_o = {}°, φ_o = {}°\n",
+            r.albedo_upper_bound(),
+            a.value,
+            a.std_err,
+            CHANNELS[a.channel],
+            a.theta_deg,
+            a.phi_deg,
+        ),
+        AlbedoBound::Measured => format!(
+            "albedo bound: max directional albedo ≤ {:.4} (measured only: Monte Carlo + 3σ; the paper's construction has no exact bound)\n\
+             maximum directional albedo: {:.4} ± {:.4} (3σ) in the {} channel at θ_o = {}°, φ_o = {}° ({} samples per direction)\n",
+            r.albedo_upper_bound(),
+            a.value,
+            3.0 * a.std_err,
+            CHANNELS[a.channel],
+            a.theta_deg,
+            a.phi_deg,
+            samples,
+        ),
+    };
     let mut s = format!(
-        "normalization: {}, symmetrize: {}, lobes: {}\n\
+        "{model}, lobes: {}\n\
          energy bound (diffuse + Σ lobe albedos ≤ 1): red {:.6}  green {:.6}  blue {:.6}  ok\n\
-         maximum directional albedo: {:.4} ± {:.4} (3σ) in the {} channel at θ_o = {}°, φ_o = {}° ({} samples per direction)\n\
+         {albedo}\
          reciprocity error max|f(a,b) − f(b,a)| / max f: {:.3e}; energy-weighted mean: {:.3e} ({} pairs)\n",
-        m.normalization.name(),
-        m.symmetrize,
         m.lobes.len(),
         r.sums[0],
         r.sums[1],
         r.sums[2],
-        a.value,
-        3.0 * a.std_err,
-        CHANNELS[a.channel],
-        a.theta_deg,
-        a.phi_deg,
-        samples,
         r.reciprocity.max_rel,
         r.reciprocity.mean_rel,
         pairs
@@ -44,6 +66,7 @@ pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> St
             "warning: the directional albedo exceeds 1: this material reflects more than it receives at that angle ({why})\n"
         ));
     }
+    s.push_str(&format!("verdict: {}\n", r.verdict()));
     s
 }
 
@@ -61,6 +84,11 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
             "max_albedo": { "value": a.value, "std_err": a.std_err, "channel": CHANNELS[a.channel],
                             "theta_deg": a.theta_deg, "phi_deg": a.phi_deg, "samples": samples },
             "albedo_exceeds_one": r.albedo_exceeds_one(),
+            "albedo_bound": { "value": r.albedo_upper_bound(),
+                              "kind": match r.bound { AlbedoBound::Exact => "exact", AlbedoBound::Measured => "measured" },
+                              "relative_rounding": match r.bound { AlbedoBound::Exact => BOUND_ROUNDING, AlbedoBound::Measured => f64::NAN } },
+            "physically_correct": r.is_physically_correct(),
+            "verdict": r.verdict(),
             "reciprocity_error": r.reciprocity.max_rel,
             "reciprocity_mean_error": r.reciprocity.mean_rel,
             "pairs": pairs,
@@ -69,5 +97,9 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
     } else {
         print!("{}: {}", material.display(), report_text(&m, &r, samples, pairs));
     }
-    Ok(())
+    if r.is_physically_correct() {
+        Ok(())
+    } else {
+        Err(NotPhysicallyCorrect.into())
+    }
 }
