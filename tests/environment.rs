@@ -9,7 +9,7 @@ use brdf_shop::scene::env::{sh_irradiance, Environment};
 use glam::DVec3;
 
 fn hdri(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/hdri").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/hdri").join(name)
 }
 
 const MAPS: [&str; 10] = [

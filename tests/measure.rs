@@ -2,9 +2,17 @@
 //! CI), through the library and once each through the binary. They assert what must hold whatever
 //! the machine's speed: which passes run, what scales with what, error trends, and zero NaN/Inf.
 
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
 use brdf_shop::measure::{bench, error_vs_time, stability};
 use brdf_shop::render::{Estimator, Renderer};
 use brdf_shop::vk::Context;
+
+/// The repository's maps, wherever the clone is.
+fn hdri() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/hdri")
+}
 
 fn renderer() -> Renderer {
     Renderer::new(Context::new(true, None).expect("a Vulkan 1.3 device with validation (tools/setup)"))
@@ -20,7 +28,8 @@ fn renderer() -> Renderer {
 #[test]
 fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     let mut r = renderer();
-    let rows = bench::run(&mut r, &bench::Plan::quick(), false).expect("bench");
+    let plan = bench::Plan { hdri: hdri(), ..bench::Plan::quick() };
+    let rows = bench::run(&mut r, &plan, false).expect("bench");
     let zero = rows.iter().find(|m| m.label == "0 lobes").expect("0 lobes");
     assert!(zero.passes.iter().all(|p| !p.0.starts_with("lobe")), "{:?}", zero.passes);
     let four = rows.iter().find(|m| m.label == "4 lobes").expect("4 lobes");
@@ -64,7 +73,7 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
 fn error_vs_time_quick_trends() {
     let mut r = renderer();
     let dir = tempfile::TempDir::new().unwrap();
-    let plan = error_vs_time::Plan::quick();
+    let plan = error_vs_time::Plan { hdri: hdri(), ..error_vs_time::Plan::quick() };
     let (rows, files) = error_vs_time::report(&mut r, &plan, dir.path(), false).expect("report");
     for f in &files {
         assert!(std::fs::metadata(f).map(|m| m.len() > 100).unwrap_or(false), "{} missing or empty", f.display());
@@ -122,8 +131,14 @@ fn stability_quick_has_no_nan_and_f32_agrees() {
 fn commands_run_through_the_binary() {
     let dir = tempfile::TempDir::new().unwrap();
     let json = dir.path().join("bench.json");
+    // Run from the repository root without --hdri or BRDF_SHOP_HDRI: the default `assets/hdri`.
     let run = |args: &[&str]| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(args).output().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env_remove("BRDF_SHOP_HDRI")
+            .output()
+            .unwrap();
         assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
         String::from_utf8_lossy(&out.stdout).into_owned()
     };
@@ -134,9 +149,46 @@ fn commands_run_through_the_binary() {
     let md = dir.path().join("stability.md");
     let text = run(&["report", "stability", "--quick", "--out", md.to_str().unwrap()]);
     assert!(text.contains("NaN/Inf") && md.exists(), "{text}");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
-        .args(["report", "error-vs-time", "--quick"])
-        .output()
-        .unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(["report", "error-vs-time", "--quick"]).output().unwrap();
     assert_eq!(out.status.code(), Some(1), "a missing --out is a usage error");
+}
+
+/// A measurement whose map is missing is refused by the map's path (one line, exit 1, nothing
+/// written), never measured on the embedded studio map under another name: from `--hdri`, from
+/// `BRDF_SHOP_HDRI`, and from the default `assets/hdri` of a current directory that has none.
+#[test]
+fn a_missing_map_is_refused_by_its_path() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let empty = dir.path().join("no-maps");
+    std::fs::create_dir(&empty).unwrap();
+    // Only studio.exr: the report also needs venice.exr.
+    let partial = dir.path().join("partial");
+    std::fs::create_dir(&partial).unwrap();
+    std::fs::copy(hdri().join("studio.exr"), partial.join("studio.exr")).unwrap();
+    let (report, json) = (dir.path().join("report"), dir.path().join("bench.json"));
+    let (e, p) = (empty.to_str().unwrap(), partial.to_str().unwrap());
+    let r = report.to_str().unwrap();
+    let cases: [(&[&str], Option<&str>, String); 5] = [
+        (&["report", "error-vs-time", "--quick", "--hdri", e, "--out", r], None, format!("{e}/studio.exr")),
+        (&["report", "error-vs-time", "--quick", "--hdri", p, "--out", r], None, format!("{p}/venice.exr")),
+        (&["report", "error-vs-time", "--quick", "--out", r], Some(e), format!("{e}/studio.exr")),
+        (&["bench", "--quick", "--hdri", e, "--json", json.to_str().unwrap()], None, format!("{e}/studio.exr")),
+        (&["bench", "--quick", "--json", json.to_str().unwrap()], None, "assets/hdri/studio.exr".into()),
+    ];
+    for (args, env, names) in cases {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_brdf-shop"));
+        // The last case runs where there is no `assets/hdri`.
+        cmd.args(args).current_dir(dir.path()).env_remove("BRDF_SHOP_HDRI");
+        if let Some(v) = env {
+            cmd.env("BRDF_SHOP_HDRI", v);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(out.stdout.is_empty(), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line on stderr, got {stderr:?}");
+        assert!(stderr.contains(&names) && stderr.contains("not found"), "{args:?}: {stderr}");
+        assert!(!report.exists() && !json.exists(), "{args:?}: something was written");
+    }
 }

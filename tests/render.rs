@@ -17,7 +17,7 @@ use brdf_shop::vk::Context;
 use glam::{DQuat, DVec3};
 
 fn hdri(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/hdri").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/hdri").join(name)
 }
 
 fn env(name: &str) -> Environment {

@@ -8,11 +8,11 @@ use std::process::Command;
 use tempfile::TempDir;
 
 fn hdri(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/hdri").join(name).display().to_string()
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/hdri").join(name).display().to_string()
 }
 
 fn mesh(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes").join(name).display().to_string()
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/meshes").join(name).display().to_string()
 }
 
 fn run(args: &[&str]) -> (i32, String, String) {
@@ -114,11 +114,13 @@ fn refusals_name_the_problem_and_leave_no_file() {
     let bad_obj = out(&dir, "bad.obj");
     std::fs::write(&bad_obj, "v 0 0 0\nf 1 2 3\n").unwrap();
     let sky = hdri("sky.exr");
+    let (no_exr, no_obj) = (out(&dir, "no/such.exr"), out(&dir, "no/such.obj"));
+    let (no_exr, no_obj) = (no_exr.to_str().unwrap(), no_obj.to_str().unwrap());
     assert_refused(run(&["render", "--out", os]), 1, &["--env"]);
-    assert_refused(run(&["render", "--env", "/no/such.exr", "--out", os]), 1, &["/no/such.exr"]);
+    assert_refused(run(&["render", "--env", no_exr, "--out", os]), 1, &[no_exr]);
     assert_refused(run(&["render", "--env", garbage.to_str().unwrap(), "--out", os]), 1, &["garbage.exr"]);
     assert_refused(run(&["render", "--env", &sky, "--mesh", bad_obj.to_str().unwrap(), "--out", os]), 1, &["bad.obj"]);
-    assert_refused(run(&["render", "--env", &sky, "--mesh", "/no/such.obj", "--out", os]), 1, &["/no/such.obj"]);
+    assert_refused(run(&["render", "--env", &sky, "--mesh", no_obj, "--out", os]), 1, &[no_obj]);
     assert_refused(run(&["render", "--env", &sky, "--size", "0x10", "--out", os]), 1, &["--size"]);
     assert_refused(run(&["render", "--env", &sky, "--size", "ten", "--out", os]), 1, &["--size"]);
     assert_refused(run(&["render", "--env", &sky, "--size", "100000x8", "--out", os]), 1, &["--size", "largest"]);
@@ -148,8 +150,8 @@ fn no_vulkan_driver_is_exit_2_with_how_to() {
     let o = out(&dir, "x.png");
     let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
         .args(["render", "--view", "canvas", "--out", o.to_str().unwrap()])
-        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
-        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", dir.path().join("nonexistent/icd.json"))
+        .env("VK_ICD_FILENAMES", dir.path().join("nonexistent/icd.json"))
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -12,9 +12,12 @@ fn renderer() -> anyhow::Result<Renderer> {
     Ok(Renderer::new(Context::from_env()?)?)
 }
 
-pub fn bench(quick: bool, json: Option<&Path>) -> anyhow::Result<()> {
+pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::Result<()> {
+    let mut plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
+    plan.hdri = brdf_shop::measure::hdri_dir(hdri);
+    // Refused before the device starts: a missing map leaves nothing written.
+    brdf_shop::measure::require_maps(&plan.hdri, &[bench::ENV])?;
     let mut r = renderer()?;
-    let plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
     let rows = bench::run(&mut r, &plan, true)?;
     print!("{}", bench::table(&rows, r.device_name()));
     if let Some(path) = json {
@@ -26,9 +29,11 @@ pub fn bench(quick: bool, json: Option<&Path>) -> anyhow::Result<()> {
     Ok(())
 }
 
-pub fn error_vs_time(quick: bool, out: &Path) -> anyhow::Result<()> {
+pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Result<()> {
+    let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
+    plan.hdri = brdf_shop::measure::hdri_dir(hdri);
+    brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
     let mut r = renderer()?;
-    let plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
     let (rows, files) = error_vs_time::report(&mut r, &plan, out, true)?;
     print!("{}", error_vs_time::summary(&rows, &plan, r.device_name()));
     for f in files {

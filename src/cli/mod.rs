@@ -119,6 +119,9 @@ enum Command {
         /// Also write the measurements as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Folder of the environment maps (default: BRDF_SHOP_HDRI, else assets/hdri in the current directory).
+        #[arg(long)]
+        hdri: Option<PathBuf>,
     },
     /// Measurement reports: error-vs-time, stability.
     #[command(subcommand)]
@@ -142,6 +145,9 @@ enum Report {
         /// Folder for error-vs-time.{csv,png,md} and the reference cache.
         #[arg(long)]
         out: PathBuf,
+        /// Folder of the environment maps (default: BRDF_SHOP_HDRI, else assets/hdri in the current directory).
+        #[arg(long)]
+        hdri: Option<PathBuf>,
     },
     /// NaN/Inf counts, GPU f32 against CPU f64 and maximum albedo over stiff and extreme inputs.
     Stability {
@@ -209,8 +215,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 size,
             })?)
         }
-        Some(Command::Bench { quick, json }) => measure::bench(quick, json.as_deref()),
-        Some(Command::Report(Report::ErrorVsTime { quick, out })) => measure::error_vs_time(quick, &out),
+        Some(Command::Bench { quick, json, hdri }) => measure::bench(quick, json.as_deref(), hdri.as_deref()),
+        Some(Command::Report(Report::ErrorVsTime { quick, out, hdri })) => {
+            measure::error_vs_time(quick, &out, hdri.as_deref())
+        }
         Some(Command::Report(Report::Stability { quick, out })) => measure::stability(quick, out.as_deref()),
         Some(Command::Reference(args)) => reference::run(&args),
         Some(Command::Eval { material }) => eval::run(&material),

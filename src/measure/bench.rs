@@ -2,6 +2,8 @@
 //! against lobe count, image size, triangle count and samples per lobe, and the `vec4` lobe pass
 //! against its scalar loop. Prints a table; writes JSON on request.
 
+use std::path::PathBuf;
+
 use crate::brdf::{Lobe, Material, Normalization};
 use crate::error::Result;
 use crate::render::{Estimator, Renderer, Settings, View};
@@ -17,7 +19,12 @@ pub struct Plan {
     /// The size of the lobe-count, triangle, spp and vec4 groups.
     pub size: (u32, u32),
     pub repeats: usize,
+    /// The folder holding [`ENV`] (`--hdri`; see `measure::hdri_dir`).
+    pub hdri: PathBuf,
 }
+
+/// The environment every configuration is lit by, read from `Plan::hdri`.
+pub const ENV: &str = "studio.exr";
 
 impl Plan {
     pub fn full() -> Plan {
@@ -29,6 +36,7 @@ impl Plan {
             spps: vec![1, 4, 8, 16, 32, 64],
             size: (512, 512),
             repeats: 5,
+            hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
 
@@ -40,6 +48,7 @@ impl Plan {
             spps: vec![4, 16],
             size: (96, 96),
             repeats: 3,
+            hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
 }
@@ -125,7 +134,7 @@ fn settings((w, h): (u32, u32), spp: u32) -> Settings {
 
 /// Runs every group of the plan.
 pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurement>> {
-    let env = super::environment("studio.exr")?;
+    let env = super::environment(&plan.hdri, ENV)?;
     r.set_environment(&env)?;
     let sphere = Mesh::sphere();
     let four = material(4);

@@ -25,6 +25,8 @@ pub struct Plan {
     pub size: u32,
     pub reference_spp: u32,
     pub repeats: usize,
+    /// The folder holding the maps `envs` names (`--hdri`; see `measure::hdri_dir`).
+    pub hdri: PathBuf,
 }
 
 impl Plan {
@@ -37,6 +39,7 @@ impl Plan {
             size: 64,
             reference_spp: 4096,
             repeats: 5,
+            hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
 
@@ -49,6 +52,7 @@ impl Plan {
             size: 32,
             reference_spp: 2048,
             repeats: 3,
+            hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
 }
@@ -178,7 +182,7 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
     });
     let mut rows = Vec::new();
     for env_name in &plan.envs {
-        let env = super::environment(env_name)?;
+        let env = super::environment(&plan.hdri, env_name)?;
         renderer.set_environment(&env)?;
         for mat_name in &plan.materials {
             let Some((_, m)) = all.iter().find(|(n, _)| n == mat_name) else {
@@ -341,8 +345,10 @@ pub fn plot(rows: &[Row], device: &str) -> Result<Vec<u8>> {
     )
 }
 
-/// Runs, writes CSV, plot and summary into `out`; returns the rows.
+/// Runs the plan and writes the CSV, plot and summary into `out`; a missing map is refused before
+/// anything is written.
 pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Vec<PathBuf>)> {
+    super::require_maps(&plan.hdri, &plan.envs)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let rows = run(renderer, plan, out, progress)?;
     let device = renderer.device_name().to_string();

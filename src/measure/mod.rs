@@ -10,28 +10,51 @@ pub mod stability;
 use std::path::{Path, PathBuf};
 
 use crate::brdf::{Lobe, Material, Normalization};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::scene::Environment;
 
-/// Where the real environment maps are: `BRDF_SHOP_HDRI`, else `../shared/assets/hdri` beside the
-/// source tree, when present.
-pub fn hdri_dir() -> Option<PathBuf> {
-    if let Ok(d) = std::env::var("BRDF_SHOP_HDRI") {
-        return Some(PathBuf::from(d)).filter(|p| p.is_dir());
+/// The folder `report error-vs-time` and `bench` read their environment maps from when neither
+/// `--hdri` nor `BRDF_SHOP_HDRI` names one: the repository's maps, relative to the current directory.
+pub const DEFAULT_HDRI_DIR: &str = "assets/hdri";
+
+/// Where the measurements' environment maps are: `flag` (`--hdri DIR`), else `BRDF_SHOP_HDRI` when
+/// set and non-empty, else [`DEFAULT_HDRI_DIR`] relative to the current directory. Nothing here
+/// depends on where the binary was built.
+pub fn hdri_dir(flag: Option<&Path>) -> PathBuf {
+    if let Some(d) = flag {
+        return d.to_path_buf();
     }
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/hdri");
-    d.is_dir().then_some(d)
+    match std::env::var_os("BRDF_SHOP_HDRI") {
+        Some(d) if !d.is_empty() => PathBuf::from(d),
+        _ => PathBuf::from(DEFAULT_HDRI_DIR),
+    }
 }
 
-/// The embedded CC0 environment (Poly Haven "studio", see `assets/README.md`).
-pub static DEFAULT_ENV: &[u8] = include_bytes!("../../assets/env/studio.exr");
+/// The embedded CC0 environment (Poly Haven "studio", see `assets/ATTRIBUTION.md`): the editor's
+/// default, never a stand-in for a measurement's map.
+pub static DEFAULT_ENV: &[u8] = include_bytes!("../../assets/hdri/studio.exr");
 
-/// Loads `name` from the HDRI folder, or the embedded default when there is none.
-pub fn environment(name: &str) -> Result<Environment> {
-    match hdri_dir() {
-        Some(d) => Environment::load(&d.join(name)),
-        None => embedded_environment(),
+/// Refuses, naming the path, the first of `names` that is not a file in `dir`; run before a
+/// measurement starts so that a missing map leaves nothing written.
+pub fn require_maps(dir: &Path, names: &[&str]) -> Result<()> {
+    for name in names {
+        let path = dir.join(name);
+        if !path.is_file() {
+            return Err(Error::input(
+                path.display().to_string(),
+                format!(
+                    "environment map not found (the maps come from --hdri DIR, else BRDF_SHOP_HDRI, else {DEFAULT_HDRI_DIR} in the current directory)"
+                ),
+            ));
+        }
     }
+    Ok(())
+}
+
+/// Loads `name` from the folder `dir`; a map that is not there is refused by its path.
+pub fn environment(dir: &Path, name: &str) -> Result<Environment> {
+    require_maps(dir, &[name])?;
+    Environment::load(&dir.join(name))
 }
 
 pub fn embedded_environment() -> Result<Environment> {
