@@ -89,7 +89,23 @@ fn materials() -> Vec<(&'static str, Material)> {
         symmetrize: true,
         lobes: vec![Lobe { rotation: DQuat::from_rotation_y(0.3), ..lobe(0.5, 0.25, 0.25) }],
     };
-    vec![("iso-ward", iso), ("aniso-gm", aniso), ("rotated-split-ward", rotated_split), ("symmetric-gm", symmetric)]
+    // The default model (issue 9): split and anisotropic facet lobes about tilted mean normals.
+    let reciprocal = Material {
+        diffuse: [0.2; 3],
+        normalization: Normalization::Reciprocal,
+        symmetrize: false,
+        lobes: vec![
+            Lobe { rotation: DQuat::from_rotation_x(0.3), split: true, ..lobe(0.4, 0.15, 0.15) },
+            Lobe { rotation: DQuat::from_rotation_y(-0.4), tangent_angle: 0.5, ..lobe(0.3, 0.1, 0.35) },
+        ],
+    };
+    vec![
+        ("iso-ward", iso),
+        ("aniso-gm", aniso),
+        ("rotated-split-ward", rotated_split),
+        ("symmetric-gm", symmetric),
+        ("tilted-reciprocal", reciprocal),
+    ]
 }
 
 /// Renders `estimator` and the reference, returns the relative L1 over the object.
