@@ -250,7 +250,8 @@ fn brdf_shop(args: &[&str]) -> (i32, String, String) {
 #[test]
 fn paint_and_check_through_the_binary() {
     let dir = tempfile::TempDir::new().unwrap();
-    let strokes = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/default.strokes.json");
+    let strokes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join("default.strokes.json");
+    let strokes = strokes.to_str().unwrap();
     let out = dir.path().join("m.brdf.json");
     let out = out.to_str().unwrap();
     let (code, _, err) = brdf_shop(&["paint", "--strokes", strokes, "--out", out]);
