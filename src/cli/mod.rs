@@ -83,7 +83,7 @@ enum Command {
     Edit {
         #[arg(long)]
         env: Option<PathBuf>,
-        /// `sphere`, `torus` (default) or an OBJ file.
+        /// `sphere`, `torus` (default) or a mesh file: OBJ, glTF 2.0 (.gltf, .glb) or PLY.
         #[arg(long)]
         mesh: Option<String>,
         #[arg(long)]

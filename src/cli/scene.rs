@@ -31,7 +31,7 @@ pub struct SceneArgs {
     /// Environment map (.exr or .hdr, equirectangular); required for mesh views.
     #[arg(long)]
     pub env: Option<PathBuf>,
-    /// `sphere`, `torus` or an OBJ file.
+    /// `sphere`, `torus` or a mesh file: OBJ, glTF 2.0 (.gltf, .glb) or PLY.
     #[arg(long, default_value = "sphere")]
     pub mesh: String,
     #[arg(long, value_enum, default_value_t = ViewArg::Mesh)]

@@ -274,8 +274,9 @@ impl App {
             state.default_light = light_from(&env, &state.camera());
             state.settings.canvas.light = state.default_light;
             self.env = env;
-        } else if name.ends_with(".obj") {
-            self.mesh = Mesh::load_obj(p)?;
+        } else if Mesh::is_mesh_file(p) {
+            // The same loader as `--mesh`: OBJ, glTF (.gltf, .glb) or PLY.
+            self.mesh = Mesh::load(p)?;
             gpu.renderer.set_mesh(&self.mesh)?;
         } else if name.ends_with(".json") {
             let m = Material::load(p)?;

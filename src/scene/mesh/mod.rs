@@ -1,8 +1,15 @@
 //! Meshes: the built-in `sphere` (fine enough that tessellation is invisible at 1024²) and `torus`
-//! (the paper's Figure 2), and Wavefront OBJ through `tobj` with area-weighted normals where the file
-//! has none. Every mesh is centred on its bounding-box centre and scaled so its bounding sphere (half
-//! the box diagonal) has radius 1, so the default camera frames any of them. Tangents are not stored:
-//! the shading frame comes from the interpolated normal by SPEC §1's rule.
+//! (the paper's Figure 2), and mesh files, one loader per format: Wavefront OBJ (`obj.rs`, through
+//! `tobj`), glTF 2.0 (`gltf.rs`, `.gltf` and `.glb`) and PLY (`ply.rs`, ASCII and binary). Every file
+//! goes through [`Mesh::from_triangles`]: area-weighted normals (outward winding) where the file has
+//! none, centred on its bounding-box centre and scaled so its bounding sphere (half the box
+//! diagonal) has radius 1, so the default camera frames any of them. Tangents are not stored (and
+//! never derived from UVs, which are not read): the shading frame comes from the interpolated normal
+//! by SPEC §1's rule.
+
+mod gltf;
+mod obj;
+mod ply;
 
 use std::path::Path;
 
@@ -79,12 +86,13 @@ impl Mesh {
         Mesh { name: "torus".into(), positions, normals, indices: grid_indices(seg, rings, true) }
     }
 
-    /// `sphere`, `torus`, or an OBJ file.
+    /// `sphere`, `torus`, or a mesh file (OBJ, glTF, PLY; see [`Mesh::load`]): what `--mesh` and
+    /// the editor's file drop take.
     pub fn resolve(arg: &str) -> Result<Mesh> {
         match arg {
             "sphere" => Ok(Mesh::sphere()),
             "torus" => Ok(Mesh::torus()),
-            path => Mesh::load_obj(Path::new(path)),
+            path => Mesh::load(Path::new(path)),
         }
     }
 
@@ -92,57 +100,51 @@ impl Mesh {
         self.indices.len() / 3
     }
 
-    /// A Wavefront OBJ file, triangulated, every object in it. Normals the file gives for every
-    /// vertex are used; otherwise they are the area-weighted face normals, after the winding is made
-    /// outward (a closed mesh whose signed volume is negative is wound inward and gets flipped). The
-    /// result is centred on its bounding-box centre and scaled to bounding radius 1. Refuses (naming
-    /// the file) a file that is not OBJ, has no triangles, uses a vertex it does not have, has a
-    /// non-finite coordinate, or has all its vertices at one point.
-    pub fn load_obj(path: &Path) -> Result<Mesh> {
-        let origin = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-        // Materials are not used: a `mtllib` line neither fails the load nor opens another file.
-        let (models, _) =
-            tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-                .map_err(|e| Error::input(&origin, format!("not a readable OBJ file: {e}")))?;
-        let mut positions: Vec<Vec3> = Vec::new();
-        let mut normals: Vec<Vec3> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut all_have_normals = true;
-        for m in &models {
-            let mesh = &m.mesh;
-            let base = positions.len();
-            let n = mesh.positions.len() / 3;
-            for c in mesh.positions.chunks_exact(3) {
-                let p = Vec3::new(c[0], c[1], c[2]);
-                if !p.is_finite() {
-                    // tobj renumbers vertices in `single_index` mode: the coordinates identify it.
-                    let what = format!("a vertex has a non-finite coordinate: v {} {} {}", c[0], c[1], c[2]);
-                    return Err(Error::input(&origin, what));
-                }
-                positions.push(p);
-            }
-            if mesh.normals.len() == mesh.positions.len() {
-                normals.extend(mesh.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
-            } else {
-                all_have_normals = false;
-            }
-            if mesh.indices.len() % 3 != 0 {
-                return Err(Error::input(&origin, "faces did not triangulate"));
-            }
-            for &i in &mesh.indices {
-                if i as usize >= n {
-                    let what = format!("a face uses vertex {} of {n}", i as u64 + 1);
-                    return Err(Error::input(&origin, what));
-                }
-                let global =
-                    u32::try_from(base + i as usize).map_err(|_| Error::input(&origin, "more than 2^32 vertices"))?;
-                indices.push(global);
-            }
+    /// A mesh file, by its extension (any case): `.obj` (Wavefront OBJ), `.gltf` / `.glb` (glTF 2.0)
+    /// or `.ply` (ASCII or binary). Every loader ends in [`Mesh::from_triangles`], so every format
+    /// is centred, scaled and given normals the same way.
+    pub fn load(path: &Path) -> Result<Mesh> {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+        match ext.as_str() {
+            "obj" => Mesh::load_obj(path),
+            "gltf" | "glb" => Mesh::load_gltf(path),
+            "ply" => Mesh::load_ply(path),
+            _ => Err(Error::input(
+                path.display().to_string(),
+                "not a mesh file this program reads (expected .obj, .gltf, .glb or .ply)",
+            )),
         }
-        if indices.is_empty() {
-            return Err(Error::input(&origin, "no triangles (no faces with three or more vertices)"));
+    }
+
+    /// Whether `path` names a mesh file [`Mesh::load`] reads (by extension).
+    pub fn is_mesh_file(path: &Path) -> bool {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+        matches!(ext.as_str(), "obj" | "gltf" | "glb" | "ply")
+    }
+
+    /// The end of every loader: refuses (naming `origin`) an empty triangle list, a non-finite
+    /// coordinate and a mesh whose vertices are all at one point; centres the mesh on its bounding-box
+    /// centre and scales it to bounding radius 1. `normals` (one per vertex, from the file) are used
+    /// when every one is finite and non-zero; otherwise the normals are the area-weighted face
+    /// normals, after the winding is made outward (a closed mesh whose signed volume is negative is
+    /// wound inward and gets flipped). Indices must be in range (the loaders check them, naming the
+    /// face).
+    pub fn from_triangles(
+        origin: &str,
+        name: String,
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        mut indices: Vec<u32>,
+    ) -> Result<Mesh> {
+        if indices.is_empty() || indices.len() % 3 != 0 {
+            return Err(Error::input(origin, "no triangles"));
+        }
+        if let Some(k) = indices.iter().position(|&i| i as usize >= positions.len()) {
+            let what = format!("triangle {} uses vertex {} of {}", k / 3, indices[k], positions.len());
+            return Err(Error::input(origin, what));
+        }
+        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+            return Err(Error::input(origin, format!("a vertex has a non-finite coordinate: {p}")));
         }
         let (lo, hi) = positions
             .iter()
@@ -151,24 +153,31 @@ impl Mesh {
         let (lo64, hi64) = (lo.as_dvec3(), hi.as_dvec3());
         let radius = (hi64 - lo64).length() / 2.0;
         if !(radius > 0.0) {
-            return Err(Error::input(&origin, "degenerate: all vertices are at one point"));
+            return Err(Error::input(origin, "degenerate: all vertices are at one point"));
         }
         let centre = (lo64 + hi64) / 2.0;
         let positions: Vec<Vec3> = positions.iter().map(|p| ((p.as_dvec3() - centre) / radius).as_vec3()).collect();
-        let usable = all_have_normals && normals.iter().all(|n| n.is_finite() && n.length() > 1e-12);
-        let normals = if usable {
-            normals.iter().map(|n| n.normalize()).collect()
-        } else {
-            if signed_volume(&positions, &indices) < 0.0 {
-                for t in indices.chunks_exact_mut(3) {
-                    t.swap(1, 2);
+        let usable = normals
+            .as_ref()
+            .filter(|n| n.len() == positions.len() && n.iter().all(|n| n.is_finite() && n.length() > 1e-12));
+        let normals = match usable {
+            Some(n) => n.iter().map(|n| n.normalize()).collect(),
+            None => {
+                if signed_volume(&positions, &indices) < 0.0 {
+                    for t in indices.chunks_exact_mut(3) {
+                        t.swap(1, 2);
+                    }
                 }
+                area_normals(&positions, &indices)
             }
-            area_normals(&positions, &indices)
         };
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or(origin);
         Ok(Mesh { name, positions, normals, indices })
     }
+}
+
+/// The file name shown as a mesh's name.
+fn file_name(path: &Path) -> String {
+    path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| path.display().to_string())
 }
 
 /// Six times the signed volume enclosed by the triangles (positive when they wind counter-clockwise
