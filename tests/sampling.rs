@@ -444,6 +444,29 @@ fn cases() -> Vec<Case> {
             deg(60.0, 200.0),
             14,
         ),
+        // The reciprocal model (issue 9): Ward's sampler in each tilted facet frame (Q and Q⁻¹).
+        Case::material(
+            "reciprocal: split facets",
+            Material {
+                normalization: Normalization::Reciprocal,
+                ..material(0.0, false, vec![split_lobe(0.15, 0.3, 0.4, DVec3::new(1.0, 0.3, 0.0), 0.4)])
+            },
+            deg(40.0, 110.0),
+            15,
+        ),
+        Case::material(
+            "reciprocal: diffuse + 2, 75°",
+            Material {
+                normalization: Normalization::Reciprocal,
+                ..material(
+                    0.3,
+                    false,
+                    vec![Lobe::isotropic([0.2; 3], 0.3), split_lobe(0.05, 0.4, 0.7, DVec3::new(0.0, 1.0, 0.2), 0.5)],
+                )
+            },
+            deg(75.0, 200.0),
+            16,
+        ),
     ]
 }
 
