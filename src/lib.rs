@@ -13,6 +13,7 @@ pub mod brdf;
 pub mod brush;
 pub mod editor;
 pub mod error;
+pub mod export;
 pub mod fsio;
 pub mod imageio;
 pub mod measure;

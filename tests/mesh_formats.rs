@@ -484,14 +484,7 @@ fn render(mesh: &Path, out: &Path) -> (i32, String) {
 
 /// Pixels with alpha (coverage) above one half.
 fn coverage(path: &Path) -> usize {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![0f32; res.width() * res.height()]),
-        |px: &mut (usize, Vec<f32>), pos, (_r, _g, _b, a): (f32, f32, f32, f32)| px.1[pos.y() * px.0 + pos.x()] = a,
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    img.layer_data.channel_data.pixels.1.iter().filter(|&&a| a > 0.5).count()
+    common::read_exr(path).pixels.iter().filter(|p| p[3] > 0.5).count()
 }
 
 /// A `.ply` and a `.glb` render through the real binary and cover what the OBJ of the same mesh

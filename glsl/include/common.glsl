@@ -2,15 +2,7 @@
 #ifndef COMMON_GLSL
 #define COMMON_GLSL
 
-const float PI = 3.14159265358979;
-
-// Rotates v by the unit quaternion q = (x, y, z, w).
-vec3 quat_rotate(vec4 q, vec3 v) {
-    vec3 t = 2.0 * cross(q.xyz, v);
-    return v + q.w * t + cross(q.xyz, t);
-}
-
-vec4 quat_conjugate(vec4 q) { return vec4(-q.xyz, q.w); }
+#include "math.glsl"
 
 // SPEC §1: t = normalize(Y × n), or (1,0,0) made orthogonal to n where |Y × n| < 1e-6; b = n × t.
 struct Frame { vec3 t; vec3 b; vec3 n; };

@@ -20,7 +20,14 @@ pub struct EvalPass {
 
 impl EvalPass {
     pub fn new(ctx: &Context) -> Result<EvalPass> {
-        Ok(EvalPass { pipeline: Pipeline::compute(ctx, crate::spirv!("eval.comp"), "eval", &BINDINGS, 4, &[])? })
+        EvalPass::from_spirv(ctx, crate::spirv!("eval.comp"), "eval")
+    }
+
+    /// The same pass from other SPIR-V with `eval.comp`'s interface (binding 0 the pairs, 1 the
+    /// values, 2 the material buffer, which it may leave unused; push constant `uint count`; 64
+    /// invocations a group): how the tests run exported GLSL (`brdf-shop export`) on the device.
+    pub fn from_spirv(ctx: &Context, spv: &[u8], name: &str) -> Result<EvalPass> {
+        Ok(EvalPass { pipeline: Pipeline::compute(ctx, spv, name, &BINDINGS, 4, &[])? })
     }
 
     /// `f` per pair `(ω_i, ω_o)` (local frame, not necessarily unit: the shader uses them as given).

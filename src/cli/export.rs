@@ -1,0 +1,16 @@
+//! `brdf-shop export --material M --format F --out P`: the material as a file for another tool
+//! (`brdf_shop::export`). The format is checked before the material is read; the output is written
+//! atomically, so a failure leaves an existing file as it was.
+
+use std::path::Path;
+
+use brdf_shop::brdf::Material;
+use brdf_shop::export::{self, Format};
+
+pub fn run(material: &Path, format: &str, out: &Path) -> anyhow::Result<()> {
+    let format = Format::parse(format)?;
+    let m = Material::load(material)?;
+    export::write(&m, format, out)?;
+    eprintln!("brdf-shop: wrote {} ({})", out.display(), format.name());
+    Ok(())
+}

@@ -1,0 +1,368 @@
+//! `brdf-shop export` for the GLSL formats and the command's refusals, through the real binary.
+//!
+//! The exported GLSL (`--format glsl`) and BRDF Explorer file (`--format brdf-explorer`) are compiled
+//! with shaderc's `glslc` (installed by tools/setup) and run on this machine's Vulkan device
+//! (lavapipe in CI) with the validation layer on, through the evaluation pass's interface
+//! (`EvalPass::from_spirv`); their values are compared with the `f64` model that `brdf-shop eval`
+//! prints. The BRDF Explorer file is read the way BRDF Explorer reads it (`BRDFBase::loadBRDF`: the
+//! first line names the type, blank lines and lines starting with `#` are skipped, `::begin`/`::end`
+//! sections, parameter lines `float NAME MIN MAX VALUE`, `bool NAME VALUE`, `color NAME R G B`) and
+//! wrapped the way it wraps it (`loadShaderFromFile`: one `uniform` per parameter at
+//! `::INSERT_UNIFORMS_HERE::`, the shader section at `::INSERT_BRDF_FUNCTION_HERE::` of its
+//! `#version 410` lit-sphere template), which must compile for OpenGL; the values are then computed
+//! with the uniforms replaced by constants holding the parameter values BRDF Explorer would set.
+
+// `!(err < bound)` fails on NaN too, which `err >= bound` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use brdf_shop::brdf::{Lobe, Material};
+use brdf_shop::render::eval::EvalPass;
+use brdf_shop::rng::Pcg32;
+use brdf_shop::vk::Context;
+use glam::DVec3;
+
+fn export(material: &Path, format: &str, out: &Path) -> String {
+    let (code, _, err) = common::run(&[
+        "export",
+        "--material",
+        material.to_str().unwrap(),
+        "--format",
+        format,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "export {format}: {err}");
+    std::fs::read_to_string(out).unwrap()
+}
+
+/// `glslc` on `src` (stage and target as glslc flags); SPIR-V bytes, or the compiler's message.
+fn glslc(src: &str, dir: &Path, name: &str, flags: &[&str]) -> Result<Vec<u8>, String> {
+    let input = dir.join(name);
+    std::fs::write(&input, src).unwrap();
+    let spv = dir.join(format!("{name}.spv"));
+    let out = Command::new("glslc")
+        .args(flags)
+        .arg(&input)
+        .arg("-o")
+        .arg(&spv)
+        .output()
+        .expect("glslc (tools/setup installs it)");
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    Ok(std::fs::read(spv).unwrap())
+}
+
+/// A compute shader with `eval.comp`'s interface around `body`, writing `call` for each pair
+/// (`wi`, `wo` in scope).
+fn compute_wrapper(body: &str, call: &str) -> String {
+    format!(
+        "#version 450
+layout(local_size_x = 64) in;
+layout(std430, set = 0, binding = 0) readonly buffer Pairs {{ vec4 v[]; }} pairs;
+layout(std430, set = 0, binding = 1) writeonly buffer Values {{ vec4 v[]; }} values;
+layout(push_constant) uniform Push {{ uint count; }} pc;
+{body}
+void main() {{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) return;
+    vec3 wi = pairs.v[2u * i].xyz;
+    vec3 wo = pairs.v[2u * i + 1u].xyz;
+    values.v[i] = vec4({call}, 0.0);
+}}
+"
+    )
+}
+
+/// Random unit pairs over the whole sphere (a quarter below the horizon, where f is 0), plus the
+/// stiff ones: normal incidence, grazing (89.9°), mirror and retro-reflection.
+fn pairs() -> Vec<(DVec3, DVec3)> {
+    let mut rng = Pcg32::new(12, 7);
+    let dir = |t: f64, p: f64| DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+    let mut out = Vec::new();
+    for _ in 0..4000 {
+        let wi = dir((rng.next_f64() * 2.0 - 0.5).acos().min(3.1), std::f64::consts::TAU * rng.next_f64());
+        let wo = dir((rng.next_f64() * 2.0 - 0.5).acos().min(3.1), std::f64::consts::TAU * rng.next_f64());
+        out.push((wi, wo));
+    }
+    let g = 89.9f64.to_radians();
+    for (a, b) in [(0.0, 0.0), (g, g), (0.5, 0.5)] {
+        out.push((dir(a, 0.3), dir(b, 0.3 + std::f64::consts::PI)));
+        out.push((dir(a, 0.3), dir(b, 0.3)));
+    }
+    out
+}
+
+/// The worst `|g − f| / max(f, 1e-4 · peak)` over pairs and channels (the value where it matters,
+/// absolute in the far tails where `f32`'s `exp` of a large exponent keeps no relative precision).
+/// Values below the horizon must be exactly 0 on both sides.
+fn worst_error(m: &Material, pairs: &[(DVec3, DVec3)], got: &[[f32; 3]]) -> f64 {
+    let want: Vec<[f64; 3]> = pairs.iter().map(|(wi, wo)| m.eval(*wi, *wo)).collect();
+    let peak = want.iter().flatten().copied().fold(0.0, f64::max);
+    let mut worst = 0.0f64;
+    for ((f, g), (wi, wo)) in want.iter().zip(got).zip(pairs) {
+        for c in 0..3 {
+            let g = g[c] as f64;
+            assert!(g.is_finite(), "non-finite {g} at {wi:?} {wo:?}");
+            if !(wi.z > 0.0 && wo.z > 0.0) {
+                assert_eq!(g, 0.0, "below the horizon at {wi:?} {wo:?}");
+            }
+            let e = (g - f[c]).abs() / f[c].max(1e-4 * peak).max(1e-300);
+            worst = worst.max(e);
+        }
+    }
+    worst
+}
+
+/// The f32 tolerance of `tests/model.rs` (`f32_agrees_with_f64`): `f32` carries 6e-8 relative
+/// rounding, the lobe exponent loses ~1e-7 absolute to the cancellation in `ω_i + ω_o`, which at
+/// α ≥ 0.08 (these materials) and 4σ off the peak is < 1e-5 nats; a formula error shows as O(1).
+const F32_TOLERANCE: f64 = 2e-3;
+
+fn device() -> Context {
+    Context::new(true, None).expect("a Vulkan 1.3 device with validation (tools/setup installs lavapipe)")
+}
+
+fn gpu_values(ctx: &Context, spv: &[u8], name: &str, m: &Material, pairs: &[(DVec3, DVec3)]) -> Vec<[f32; 3]> {
+    let pass = EvalPass::from_spirv(ctx, spv, name).expect("pipeline from the exported GLSL");
+    let got = pass.run(ctx, m, pairs).expect("dispatch");
+    pass.destroy(ctx);
+    let errors = ctx.validation_errors();
+    assert!(errors.is_empty(), "validation errors: {errors:?}");
+    got
+}
+
+#[test]
+fn glsl_export_evaluates_what_eval_does_on_the_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let ctx = device();
+    let pairs = pairs();
+    for (name, path) in common::export_materials(dir.path()) {
+        let m = Material::load(&path).unwrap();
+        let text = export(&path, "glsl", &dir.path().join(format!("{name}.glsl")));
+        let src = compute_wrapper(&text, "material_eval(wi, wo)");
+        let spv = glslc(&src, dir.path(), &format!("{name}.comp"), &["--target-env=vulkan1.3", "-O"])
+            .unwrap_or_else(|e| panic!("{name}: the exported GLSL does not compile:\n{e}"));
+        let got = gpu_values(&ctx, &spv, &name, &m, &pairs);
+        let worst = worst_error(&m, &pairs, &got);
+        println!("glsl export {name:28} worst relative difference to eval: {worst:.2e}");
+        assert!(worst < F32_TOLERANCE, "{name}: {worst:.3e}");
+    }
+}
+
+#[test]
+fn glsl_export_is_the_renderers_model_source() {
+    // Every line of glsl/include/brdf.glsl but its include guards stands in the export, in order:
+    // the export is the renderer's source, not a copy that can drift.
+    let dir = tempfile::tempdir().unwrap();
+    let (_, path) = common::export_materials(dir.path()).pop().unwrap();
+    let text = export(&path, "glsl", &dir.path().join("m.glsl"));
+    let brdf = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include/brdf.glsl")).unwrap();
+    let mut rest = text.as_str();
+    for line in brdf.lines().filter(|l| !l.trim_start().starts_with('#')) {
+        let at = rest.find(line).unwrap_or_else(|| panic!("brdf.glsl line missing from the export: {line:?}"));
+        rest = &rest[at + line.len()..];
+    }
+    assert!(!text.lines().any(|l| l.trim_start().starts_with("#include")), "the export has an #include");
+}
+
+/// A BRDF Explorer parameter as its loader reads it.
+enum Param {
+    Float(String, f32),
+    Bool(String, bool),
+    Color(String, [f32; 3]),
+}
+
+/// `BRDFBase::loadBRDF` on the text: the parameters and the shader section.
+fn load_brdf_explorer(text: &str) -> (Vec<Param>, String) {
+    let mut lines = text.lines();
+    let kind = lines.next().unwrap().trim();
+    assert_eq!(kind.split(' ').next(), Some("analytic"), "first line must name the type");
+    let (mut params, mut shader, mut section) = (Vec::new(), String::new(), String::new());
+    for line in lines {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let mut tok = t.split_whitespace();
+        match tok.next().unwrap() {
+            "::begin" => {
+                assert!(section.is_empty(), "nested section");
+                section = tok.next().unwrap().to_string();
+            }
+            "::end" => {
+                assert_eq!(tok.next().unwrap(), section, "::end of another section");
+                section.clear();
+            }
+            first if section == "parameters" => {
+                let name = tok.next().expect("parameter name").to_string();
+                let nums: Vec<f32> = tok.map(|v| v.parse().expect("parameter value")).collect();
+                params.push(match first {
+                    "float" => {
+                        assert_eq!(nums.len(), 3, "float NAME MIN MAX VALUE: {t}");
+                        assert!(nums[0] <= nums[2] && nums[2] <= nums[1], "value outside its range: {t}");
+                        Param::Float(name, nums[2])
+                    }
+                    "bool" => Param::Bool(name, nums[0] != 0.0),
+                    "color" => Param::Color(name, [nums[0], nums[1], nums[2]]),
+                    other => panic!("BRDF Explorer has no parameter type {other}"),
+                });
+            }
+            _ if section == "shader" => {
+                shader.push_str(line);
+                shader.push('\n');
+            }
+            _ => panic!("line outside a section: {t}"),
+        }
+    }
+    (params, shader)
+}
+
+/// The `::INSERT_UNIFORMS_HERE::` text: `uniform` declarations (floats, then bools, then colours).
+fn uniforms(params: &[Param]) -> String {
+    let mut s = String::new();
+    for kind in 0..3 {
+        for p in params {
+            match (kind, p) {
+                (0, Param::Float(n, _)) => s += &format!("uniform float {n};\n"),
+                (1, Param::Bool(n, _)) => s += &format!("uniform bool {n};\n"),
+                (2, Param::Color(n, _)) => s += &format!("uniform vec3 {n};\n"),
+                _ => {}
+            }
+        }
+    }
+    s
+}
+
+/// The same names as constants holding the values BRDF Explorer sets (its `adjustShaderPreRender`).
+fn constants(params: &[Param]) -> String {
+    let f = |v: f32| format!("{v:?}");
+    params
+        .iter()
+        .map(|p| match p {
+            Param::Float(n, v) => format!("const float {n} = {};\n", f(*v)),
+            Param::Bool(n, v) => format!("const bool {n} = {v};\n"),
+            Param::Color(n, c) => format!("const vec3 {n} = vec3({}, {}, {});\n", f(c[0]), f(c[1]), f(c[2])),
+        })
+        .collect()
+}
+
+/// BRDF Explorer's lit-sphere fragment template (`brdftemplatesphere.frag`), its declarations and
+/// the call it makes, with the two insertion points.
+const LIT_SPHERE_TEMPLATE: &str = "#version 410
+uniform vec3 incidentVector;
+uniform float incidentTheta;
+uniform float incidentPhi;
+uniform float brightness;
+uniform float gamma;
+uniform float exposure;
+uniform float useNDotL;
+in vec4 worldSpaceVert;
+in vec4 eyeSpaceVert;
+out vec4 fragColor;
+::INSERT_UNIFORMS_HERE::
+::INSERT_BRDF_FUNCTION_HERE::
+void main(void)
+{
+    vec3 normal = normalize( worldSpaceVert.xyz );
+    vec3 tangent = normalize( cross( vec3(0,1,0), normal ) );
+    vec3 bitangent = normalize( cross( normal, tangent ) );
+    vec3 viewVec = vec3(0,0,1);
+    vec3 b = max( BRDF( incidentVector, viewVec, normal, tangent, bitangent ), vec3(0.0) );
+    if (useNDotL != 0) b *= dot( normal, incidentVector );
+    b *= brightness * pow( 2.0, exposure );
+    b = pow( b, vec3( 1.0 / gamma ) );
+    fragColor = vec4( clamp( b, vec3(0.0), vec3(1.0) ), 1.0 );
+}
+";
+
+#[test]
+fn brdf_explorer_export_loads_compiles_and_evaluates_what_eval_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let ctx = device();
+    let pairs = pairs();
+    // BRDF(L, V, N, X, Y) in a tilted world frame: N off every axis, X and Y from SPEC §1's rule
+    // (BRDF Explorer's own tangent), the local pairs rotated into it.
+    let call = "BRDF(wi.x * X + wi.y * Y + wi.z * N, wo.x * X + wo.y * Y + wo.z * N, N, X, Y)";
+    let frame = "const vec3 N = normalize(vec3(0.3, 0.8, 0.52));
+const vec3 X = normalize(cross(vec3(0.0, 1.0, 0.0), N));
+const vec3 Y = cross(N, X);
+";
+    for (name, path) in common::export_materials(dir.path()) {
+        let m = Material::load(&path).unwrap();
+        let text = export(&path, "brdf-explorer", &dir.path().join(format!("{name}.brdf")));
+        let (params, shader) = load_brdf_explorer(&text);
+        assert!(shader.contains("vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"), "{name}: no BRDF function");
+        // As BRDF Explorer compiles it: OpenGL 4.1, loose uniforms.
+        let gl = LIT_SPHERE_TEMPLATE
+            .replace("::INSERT_UNIFORMS_HERE::\n", &uniforms(&params))
+            .replace("::INSERT_BRDF_FUNCTION_HERE::\n", &format!("\n{shader}\n"));
+        glslc(&gl, dir.path(), &format!("{name}.frag"), &["--target-env=opengl4.5", "-fauto-map-locations"])
+            .unwrap_or_else(|e| panic!("{name}: BRDF Explorer's wrapping does not compile:\n{e}"));
+        // Its values, with the parameters BRDF Explorer would set.
+        let src = compute_wrapper(&format!("{}{frame}{shader}", constants(&params)), call);
+        let spv = glslc(&src, dir.path(), &format!("{name}.comp"), &["--target-env=vulkan1.3", "-O"])
+            .unwrap_or_else(|e| panic!("{name}: the BRDF Explorer shader does not compile for Vulkan:\n{e}"));
+        let got = gpu_values(&ctx, &spv, &name, &m, &pairs);
+        let worst = worst_error(&m, &pairs, &got);
+        println!("brdf-explorer export {name:28} worst relative difference to eval: {worst:.2e}");
+        assert!(worst < F32_TOLERANCE, "{name}: {worst:.3e}");
+    }
+}
+
+#[test]
+fn export_refusals_are_one_line_and_leave_outputs_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, good) = common::export_materials(d).pop().unwrap();
+    let good = good.to_str().unwrap();
+    let existing = d.join("existing.glsl");
+    std::fs::write(&existing, "keep me").unwrap();
+    let many = d.join("many.brdf.json");
+    let lobes = (0..65).map(|k| Lobe { tangent_angle: 0.01 * k as f64, ..common::lobe(0.01, 0.2, 0.2) }).collect();
+    Material { diffuse: [0.2; 3], lobes, ..Material::scratch() }.save(&many).unwrap();
+    let bad = d.join("bad.brdf.json");
+    std::fs::write(&bad, "{\"format\": \"brdf-shop/material\", \"version\": 2, \"diffuse\": [2, 0, 0], \"lobes\": []}")
+        .unwrap();
+    let e = existing.to_str().unwrap();
+    let missing_dir = d.join("no-such-folder/m.py");
+    let none = d.join("none.json");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--material", good, "--format", "maya", "--out", e], "unknown format"),
+        (vec!["--material", good, "--format", "gl\u{1b}[31msl", "--out", e], "unknown format"),
+        (vec!["--material", good, "--format", "glsl", "--out", missing_dir.to_str().unwrap()], "no-such-folder"),
+        (vec!["--material", good, "--format", "glsl", "--out", d.to_str().unwrap()], "folder"),
+        (vec!["--material", many.to_str().unwrap(), "--format", "brdf-explorer", "--out", e], "at most 64"),
+        (vec!["--material", bad.to_str().unwrap(), "--format", "mitsuba", "--out", e], "bad.brdf.json"),
+        (vec!["--material", none.to_str().unwrap(), "--format", "glsl", "--out", e], "none.json"),
+        (vec!["--material", good, "--out", e], "--format"),
+    ];
+    for (args, needle) in cases {
+        let mut all = vec!["export"];
+        all.extend(&args);
+        let (code, stdout, stderr) = common::run(&all);
+        assert_eq!(code, 1, "{args:?}: exit {code}, stderr {stderr}");
+        assert!(stdout.is_empty(), "{args:?}: stdout {stdout}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: not one line: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr} does not say {needle}");
+        assert!(!stderr.contains('\u{1b}'), "{args:?}: raw control character in {stderr:?}");
+        assert_eq!(std::fs::read_to_string(&existing).unwrap(), "keep me", "{args:?} touched the output");
+        assert!(!missing_dir.exists());
+    }
+    // Nothing but the inputs and the untouched output are left (no temporary files).
+    let mut names: Vec<String> =
+        std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    assert!(names.iter().all(|n| !n.contains(".tmp")), "{names:?}");
+    // The 64-lobe limit is the format's: glsl and mitsuba take the 65-lobe material.
+    for (format, ext) in [("glsl", "glsl"), ("mitsuba", "py")] {
+        let out = d.join(format!("many.{ext}"));
+        let text = export(&many, format, &out);
+        assert!(text.len() > 1000, "{format}");
+    }
+}

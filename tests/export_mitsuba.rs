@@ -1,0 +1,184 @@
+//! `brdf-shop export --format mitsuba` against Mitsuba 3 itself (from PyPI, installed by tools/setup
+//! into `<cargo target folder>/mitsuba-venv`, `llvm_ad_rgb` variant on Dr.Jit's LLVM backend).
+//!
+//! 1. The plug-in's `eval` (through Mitsuba's BSDF interface) equals `brdf-shop eval` to 1e-5
+//!    relative on random directions, and its `sample` weights equal `eval / pdf`.
+//! 2. The exported file, run as a program, renders a sphere under real maps in Mitsuba's `direct`
+//!    integrator (emitter and BSDF sampling with MIS), and the image matches `brdf-shop reference`
+//!    within 2 % relative L1 over the object.
+
+// `!(err < bound)` fails on NaN too, which `err >= bound` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use brdf_shop::brdf::Material;
+use brdf_shop::reference::relative_l1;
+use brdf_shop::rng::Pcg32;
+use glam::DVec3;
+
+/// The virtual environment tools/setup makes: `<target>/mitsuba-venv`, `<target>` being the parent
+/// of cargo's `CARGO_TARGET_TMPDIR` (`<target>/tmp`).
+fn python() -> PathBuf {
+    let target = Path::new(env!("CARGO_TARGET_TMPDIR")).parent().unwrap().to_path_buf();
+    let p = target.join("mitsuba-venv/bin/python3");
+    assert!(p.exists(), "{} missing: run tools/setup (it installs Mitsuba 3 there)", p.display());
+    p
+}
+
+fn export_plugin(material: &Path, out: &Path) {
+    let (code, _, err) = common::run(&[
+        "export",
+        "--material",
+        material.to_str().unwrap(),
+        "--format",
+        "mitsuba",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "export mitsuba: {err}");
+}
+
+/// Random pairs over the sphere (a quarter of each below the horizon), as `f32` values.
+fn pairs(n: usize) -> Vec<(DVec3, DVec3)> {
+    let mut rng = Pcg32::new(5, 11);
+    let mut dir = || {
+        let t = (rng.next_f64() * 1.25 - 0.25).acos();
+        let p = 2.0 * std::f64::consts::PI * rng.next_f64();
+        DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos()).as_vec3().as_dvec3()
+    };
+    (0..n).map(|_| (dir(), dir())).collect()
+}
+
+fn numbers(line: &str, tag: &str) -> Vec<f64> {
+    let mut it = line.split_whitespace();
+    assert_eq!(it.next(), Some(tag), "{line}");
+    it.map(|v| v.parse::<f64>().unwrap_or_else(|_| panic!("{line}"))).collect()
+}
+
+/// Tolerance 1e-5 (the issue's): the plug-in evaluates in `f64` and returns `f · cos θ_i` in `f32`,
+/// which rounds by 6e-8 relative; Dr.Jit's double-precision `exp`/`log` are accurate to ~1e-15.
+/// Values below 1e-30 (where `f32` itself loses precision) are compared absolutely.
+const EVAL_TOLERANCE: f64 = 1e-5;
+
+#[test]
+fn plugin_eval_equals_eval_and_sample_weights_are_eval_over_pdf() {
+    let dir = tempfile::tempdir().unwrap();
+    let pairs = pairs(2000);
+    let text: String =
+        pairs.iter().map(|(a, b)| format!("{:?} {:?} {:?} {:?} {:?} {:?}\n", a.x, a.y, a.z, b.x, b.y, b.z)).collect();
+    let pairs_file = dir.path().join("pairs.txt");
+    std::fs::write(&pairs_file, &text).unwrap();
+    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mitsuba/check_plugin.py");
+    for (name, path) in common::export_materials(dir.path()) {
+        let m = Material::load(&path).unwrap();
+        let plugin = dir.path().join(format!("{name}.py"));
+        export_plugin(&path, &plugin);
+        let out = Command::new(python()).arg(&harness).arg(&plugin).arg(&pairs_file).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        let lines: Vec<&str> = stdout.lines().collect();
+        assert_eq!(lines.len(), 2 * pairs.len(), "{name}");
+        let (mut worst, mut worst_w, mut sampled) = (0.0f64, 0.0f64, 0usize);
+        for (k, (wi, wo)) in pairs.iter().enumerate() {
+            let e = numbers(lines[2 * k], "E");
+            let f = m.eval(*wi, *wo);
+            let cos = if wi.z > 0.0 && wo.z > 0.0 { wi.z } else { 0.0 };
+            for c in 0..3 {
+                let want = f[c] * cos;
+                let err = (e[c] - want).abs() / want.max(1e-30);
+                assert!(err.is_finite(), "{name}: {e:?} against {want}");
+                worst = worst.max(err);
+            }
+            if !(wo.z > 0.0 && wi.z > 0.0) {
+                assert_eq!(e[3], 0.0, "{name}: pdf below the horizon");
+            }
+            // The sample: weight = eval/pdf where the sample is valid, 0 otherwise.
+            let s = numbers(lines[2 * k + 1], "S");
+            let (w, pdf, ratio) = (&s[3..6], s[6], &s[7..10]);
+            if pdf > 0.0 {
+                sampled += 1;
+                assert!(s[2] > 0.0, "{name}: sample below the horizon with pdf {pdf}");
+                for c in 0..3 {
+                    worst_w = worst_w.max((w[c] - ratio[c]).abs() / ratio[c].max(1e-6));
+                }
+            } else {
+                assert!(w.iter().all(|&v| v == 0.0), "{name}: weight {w:?} without pdf");
+            }
+        }
+        println!("mitsuba plug-in {name:28} eval worst relative {worst:.2e}, sample weight vs eval/pdf {worst_w:.2e}, {sampled} valid samples");
+        assert!(worst < EVAL_TOLERANCE, "{name}: eval differs by {worst:.3e}");
+        // eval/pdf in f32 from the same f64 values: a few f32 roundings apart.
+        assert!(worst_w < 1e-5, "{name}: sample weights differ from eval/pdf by {worst_w:.3e}");
+        // Views above the horizon (3/5 of the pairs) sample valid directions most of the time.
+        assert!(sampled > pairs.len() / 3, "{name}: only {sampled} valid samples");
+    }
+}
+
+/// Renders the exported material with Mitsuba and with `brdf-shop reference`; returns the relative
+/// L1 over the object and Mitsuba's wall time in seconds.
+fn compare(dir: &Path, name: &str, material: &Path, map: &str, size: u32, spp: u32, ref_spp: u32) -> (f64, f64) {
+    let plugin = dir.join(format!("{name}.py"));
+    export_plugin(material, &plugin);
+    let env = common::asset(&format!("hdri/{map}"));
+    let size_arg = format!("{size}x{size}");
+    let ours = dir.join(format!("{name}-{map}-mitsuba.exr"));
+    let t = std::time::Instant::now();
+    let out = Command::new(python())
+        .arg(&plugin)
+        .args(["--env", env.to_str().unwrap(), "--size", &size_arg, "--spp", &spp.to_string(), "--out"])
+        .arg(&ours)
+        .output()
+        .unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    assert!(out.status.success(), "{name} {map}: {}", String::from_utf8_lossy(&out.stderr));
+    let reference = dir.join(format!("{name}-{map}-reference.exr"));
+    let (code, _, err) = common::run(&[
+        "reference",
+        "--material",
+        material.to_str().unwrap(),
+        "--env",
+        env.to_str().unwrap(),
+        "--mesh",
+        "sphere",
+        "--size",
+        &size_arg,
+        "--spp",
+        &ref_spp.to_string(),
+        "--out",
+        reference.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "reference: {err}");
+    let a = common::read_exr(&ours);
+    let b = common::read_exr(&reference);
+    let covered = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p[3] >= 0.5 && q[3] >= 0.5).count();
+    assert!(covered > (size * size / 4) as usize, "{name} {map}: only {covered} pixels on the object in both");
+    (relative_l1(&a, &b).expect("same size, covered pixels"), seconds)
+}
+
+/// Tolerance 2 % relative L1 (the issue's). Both sides are Monte Carlo estimates of the same
+/// integral (the same bilinear map — the plug-in's scene resamples it for Mitsuba's row convention —,
+/// the same BRDF, pixel-centre rays; the tessellated sphere of `reference` against Mitsuba's analytic
+/// one). Their noise, measured on studio.exr at 48² (each image against one at 4× the samples):
+/// Mitsuba's independent sampler 1.1 % at 4096 spp and so ≈ 0.55 % at 16384, `reference`'s
+/// quasi-random MIS 0.5 % at 4096; the pair at 16384/4096 spp measured 0.7–0.9 %. So 2 % leaves the
+/// noise room and fails on a systematic difference above about 1 % (the map's row convention left
+/// unmatched measured 1.6 % on the background alone; a flipped frame or mis-sampled lobe is 10 %+).
+const RENDER_TOLERANCE: f64 = 0.02;
+
+#[test]
+fn mitsuba_renders_what_reference_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let materials = common::export_materials(dir.path());
+    let pick = |n: &str| materials.iter().find(|(name, _)| name == n).unwrap().1.clone();
+    let cases =
+        [("painted-default", "studio.exr"), ("painted-default", "venice.exr"), ("rotated-split-ward", "city.exr")];
+    for (name, map) in cases {
+        let (err, seconds) = compare(dir.path(), name, &pick(name), map, 32, 16384, 4096);
+        println!("mitsuba vs reference {name:20} {map:12} relative L1 {err:.4} (mitsuba {seconds:.1} s)");
+        assert!(err < RENDER_TOLERANCE, "{name} on {map}: {err:.4}");
+    }
+}
