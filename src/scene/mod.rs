@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod env;
+pub mod keylight;
 pub mod mesh;
 
 pub use camera::Camera;
