@@ -226,3 +226,45 @@ fn state_handles_inputs_like_the_window() {
     s.handle(Input::Brush(BrushKind::Streak));
     assert_eq!(s.brush, BrushKind::Streak);
 }
+
+/// The editor's energy report comes from a worker thread: every material asked for is eventually
+/// described by a report equal to the synchronous one (the measurement is deterministic), the newest
+/// request wins, and a finished report tells the window (the callback) it is ready.
+#[test]
+fn energy_report_is_measured_off_the_ui_thread() {
+    use brdf_shop::brdf::energy::Report;
+    use brdf_shop::brdf::Lobe;
+    use brdf_shop::editor::report::{ReportWorker, PAIRS, SAMPLES};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+
+    let done = Arc::new(AtomicUsize::new(0));
+    let counter = done.clone();
+    let mut worker = ReportWorker::new(move || {
+        counter.fetch_add(1, Ordering::SeqCst);
+    });
+    // The paper's model (Monte Carlo albedo) and the reciprocal one (quadrature), asked in a burst.
+    let mut materials = Vec::new();
+    for k in 0..4 {
+        let mut m = if k % 2 == 0 { Material::scratch_paper() } else { Material::scratch() };
+        m.lobes.push(Lobe::isotropic([0.3; 3], 0.05 + 0.1 * k as f64));
+        worker.request(&m);
+        materials.push(m);
+    }
+    let newest = materials.last().unwrap().clone();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    let report = loop {
+        if let Some((r, true)) = worker.latest(&newest) {
+            break *r;
+        }
+        assert!(std::time::Instant::now() < deadline, "no report of the newest material within 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    assert_eq!(report, Report::measure(&newest, SAMPLES, PAIRS));
+    assert!(done.load(Ordering::SeqCst) >= 1, "the window was not told");
+    // An older material is not the current one's report.
+    assert!(matches!(worker.latest(&materials[0]), Some((_, false))));
+    // Asking again for the material already described changes nothing.
+    worker.request(&newest);
+    assert!(matches!(worker.latest(&newest), Some((_, true))));
+}

@@ -12,6 +12,7 @@
 
 pub mod graph;
 pub mod panel;
+pub mod report;
 pub mod state;
 
 use std::collections::VecDeque;
@@ -139,8 +140,8 @@ struct App {
     egui_ctx: egui::Context,
     egui_state: Option<egui_winit::State>,
     spp: u32,
-    /// The energy report of the material shown (recomputed when it changes).
-    report: Option<(Material, crate::brdf::energy::Report)>,
+    /// The energy report of the material shown, measured off the UI thread (made with the window).
+    report: Option<report::ReportWorker>,
     timings: Vec<(String, f64)>,
     /// A panel widget was being dragged last frame: its edits amend one history step.
     panel_dragging: bool,
@@ -418,10 +419,12 @@ impl App {
         ));
         self.timings = mesh_frame.timings.iter().chain(&canvas_frame.timings).map(|t| (t.name.clone(), t.ms)).collect();
         // The tool panel: run egui on this frame's input, apply what the user did after drawing.
-        let report_stale = self.report.as_ref().is_none_or(|(rm, _)| *rm != m);
-        if report_stale {
-            self.report = Some((m.clone(), crate::brdf::energy::Report::measure(&m, 2_000, 20_000)));
-        }
+        let worker = self.report.get_or_insert_with(|| {
+            let window = gpu.window.clone();
+            report::ReportWorker::new(move || window.request_redraw())
+        });
+        worker.request(&m);
+        let report = worker.latest(&m);
         let quality = if self.refine_samples == 0 {
             format!("mesh view: fis {} spp", self.spp)
         } else {
@@ -433,7 +436,8 @@ impl App {
         let info = panel::Info {
             brush: state.brush,
             split: state.settings.split_lobes,
-            report: self.report.as_ref().map(|r| &r.1),
+            report: report.map(|r| r.0),
+            report_updating: report.is_none_or(|r| !r.1),
             timings: &self.timings,
             quality: &quality,
             status: &state.status,

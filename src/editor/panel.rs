@@ -34,6 +34,8 @@ pub struct Info<'a> {
     pub brush: BrushKind,
     pub split: bool,
     pub report: Option<&'a Report>,
+    /// Whether the report shown is an older material's (a newer one is being measured).
+    pub report_updating: bool,
     pub timings: &'a [(String, f64)],
     pub quality: &'a str,
     pub status: &'a str,
@@ -150,6 +152,9 @@ pub fn show(
             if m.is_physically_correct_by_construction() {
                 let b = sums.iter().copied().fold(0.0, f64::max);
                 ui.label(format!("albedo bound {b:.3} (exact), reciprocal by construction"));
+            }
+            if info.report_updating {
+                ui.weak("energy report: updating…");
             }
             if let Some(r) = info.report {
                 ui.label(format!(

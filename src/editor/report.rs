@@ -1,0 +1,83 @@
+//! The energy report of the editor's material, computed off the UI thread (issue 11: "nothing slow
+//! on the UI thread"). A stroke or slider edit asks for a new report and goes on at once; one worker
+//! thread measures the newest material asked for (older requests still queued are skipped), and the
+//! panel shows the newest finished report, marked as updating while it is not the current
+//! material's. No window or GPU here: `on_done` (the editor passes a redraw request) is how the
+//! window learns a report is ready.
+
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::thread::JoinHandle;
+
+use crate::brdf::energy::Report;
+use crate::brdf::Material;
+
+/// Monte Carlo samples per view and reciprocity pairs of the editor's report (the paper model's
+/// measured albedo; the reciprocal model's bound is exact and quadrature-based).
+pub const SAMPLES: usize = 2_000;
+pub const PAIRS: usize = 20_000;
+
+pub struct ReportWorker {
+    requests: Option<Sender<Material>>,
+    done: Receiver<(Material, Report)>,
+    thread: Option<JoinHandle<()>>,
+    /// The newest finished report and the material it describes.
+    latest: Option<(Material, Report)>,
+    /// The material most recently asked for.
+    asked: Option<Material>,
+}
+
+impl ReportWorker {
+    /// Starts the worker; `on_done` runs on the worker thread after each report.
+    pub fn new(on_done: impl Fn() + Send + 'static) -> ReportWorker {
+        let (req_tx, req_rx) = channel::<Material>();
+        let (done_tx, done) = channel();
+        let thread = std::thread::Builder::new()
+            .name("brdf-shop energy report".into())
+            .spawn(move || {
+                while let Ok(mut m) = req_rx.recv() {
+                    // Only the newest request matters.
+                    while let Ok(newer) = req_rx.try_recv() {
+                        m = newer;
+                    }
+                    let report = Report::measure(&m, SAMPLES, PAIRS);
+                    if done_tx.send((m, report)).is_err() {
+                        return;
+                    }
+                    on_done();
+                }
+            })
+            .ok();
+        ReportWorker { requests: Some(req_tx), done, thread, latest: None, asked: None }
+    }
+
+    /// Asks for the report of `m` unless it is the one asked for last; returns at once.
+    pub fn request(&mut self, m: &Material) {
+        if self.asked.as_ref() == Some(m) {
+            return;
+        }
+        self.asked = Some(m.clone());
+        let sent = self.requests.as_ref().is_some_and(|tx| tx.send(m.clone()).is_ok());
+        if !sent {
+            // No worker thread (it could not be started): measure here rather than show nothing.
+            self.latest = Some((m.clone(), Report::measure(m, SAMPLES, PAIRS)));
+        }
+    }
+
+    /// The newest finished report, and whether it is `current`'s (false while an update is pending).
+    pub fn latest(&mut self, current: &Material) -> Option<(&Report, bool)> {
+        while let Ok(r) = self.done.try_recv() {
+            self.latest = Some(r);
+        }
+        self.latest.as_ref().map(|(m, r)| (r, m == current))
+    }
+}
+
+impl Drop for ReportWorker {
+    fn drop(&mut self) {
+        // Closing the request channel ends the worker after the report it is measuring.
+        self.requests = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
