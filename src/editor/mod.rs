@@ -113,9 +113,24 @@ impl Drop for Gpu {
     }
 }
 
+/// What the editor needs of the environment beyond its texels, computed once per map (not per frame).
+struct EnvSummary {
+    /// `Environment::brightest_direction`, where the canvas light starts.
+    brightest: DVec3,
+    /// [`auto_exposure`]'s scale of the mesh view.
+    exposure: f64,
+}
+
+impl EnvSummary {
+    fn of(env: &Environment) -> EnvSummary {
+        EnvSummary { brightest: env.brightest_direction(), exposure: auto_exposure(env) }
+    }
+}
+
 struct App {
     opts: Options,
     env: Environment,
+    env_summary: EnvSummary,
     mesh: Mesh,
     start: Material,
     replay: Option<Strokes>,
@@ -153,8 +168,8 @@ pub const REFINE_MAX: u32 = 1024;
 
 /// The canvas light the editor starts with: the environment's brightest direction seen from the
 /// camera (canvas x = right, y = up, z = towards the viewer).
-fn light_from(env: &Environment, state_camera: &crate::scene::Camera) -> DVec3 {
-    let d = env.brightest_direction();
+fn light_from(env: &EnvSummary, state_camera: &crate::scene::Camera) -> DVec3 {
+    let d = env.brightest;
     let (right, up, forward) = state_camera.basis();
     DVec3::new(d.dot(right), d.dot(up), -d.dot(forward)).normalize()
 }
@@ -218,7 +233,7 @@ impl App {
         let mut state = State::new(self.start.clone(), settings, Layout::new(w.max(1), h.max(1)));
         if self.replay.is_none() {
             // The light as the orbit camera sees the environment's brightest direction.
-            state.default_light = light_from(&self.env, &state.camera());
+            state.default_light = light_from(&self.env_summary, &state.camera());
             state.settings.canvas.light = state.default_light;
         }
         if let Some(strokes) = &self.replay {
@@ -272,9 +287,11 @@ impl App {
         if name.ends_with(".exr") || name.ends_with(".hdr") {
             let env = Environment::load(p)?;
             gpu.renderer.set_environment(&env)?;
-            state.default_light = light_from(&env, &state.camera());
+            let summary = EnvSummary::of(&env);
+            state.default_light = light_from(&summary, &state.camera());
             state.settings.canvas.light = state.default_light;
             self.env = env;
+            self.env_summary = summary;
         } else if Mesh::is_mesh_file(p) {
             // The same loader as `--mesh`: OBJ, glTF (.gltf, .glb) or PLY.
             self.mesh = Mesh::load(p)?;
@@ -316,7 +333,7 @@ impl App {
         // The canvas light follows the environment's brightest direction seen from the orbiting
         // camera, unless the user moved it (a replay keeps its strokes file's light).
         if !state.light_moved && self.replay.is_none() {
-            state.default_light = light_from(&self.env, &state.camera());
+            state.default_light = light_from(&self.env_summary, &state.camera());
             state.settings.canvas.light = state.default_light;
         }
         let m = state.material().clone();
@@ -387,7 +404,7 @@ impl App {
                 }
             }
         };
-        blit(&mut rgba, &mesh_frame.image, l.mesh_x as usize, self.exposure * auto_exposure(&self.env));
+        blit(&mut rgba, &mesh_frame.image, l.mesh_x as usize, self.exposure * self.env_summary.exposure);
         blit(&mut rgba, &canvas_frame.image, l.canvas_x as usize, self.exposure);
         // The snap marker: the mirror point, where a new lobe needs no rotation (paper §3.3.1).
         if let Some((cu, cv)) = state.settings.canvas.mirror_point() {
@@ -855,6 +872,7 @@ pub fn run(opts: Options) -> Result<()> {
     })?;
     let mut app = App {
         opts,
+        env_summary: EnvSummary::of(&env),
         env,
         mesh,
         start,
