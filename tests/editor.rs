@@ -268,3 +268,46 @@ fn energy_report_is_measured_off_the_ui_thread() {
     worker.request(&newest);
     assert!(matches!(worker.latest(&newest), Some((_, true))));
 }
+
+/// Scripted drops (`--drop`): good files (a map, a mesh, a material) take effect, bad ones (a broken
+/// EXR, a missing OBJ, a truncated material) are one stderr line each and a status line, and the
+/// session goes on to write `--out` — the material dropped last, after the bad files.
+#[test]
+fn dropped_files_that_do_not_load_do_not_end_the_session() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    std::fs::write(d("broken.exr"), b"not an exr").unwrap();
+    std::fs::write(d("cut.brdf.json"), b"{\"format\": \"brdf-shop/material\", \"vers").unwrap();
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let good = assets.join("bench-4lobes.brdf.json");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--replay"])
+        .arg(assets.join("default.strokes.json"))
+        .arg("--drop")
+        .arg(d("broken.exr"))
+        .arg("--drop")
+        .arg(assets.join("hdri/city.exr"))
+        .arg("--drop")
+        .arg(d("missing.obj"))
+        .arg("--drop")
+        .arg(assets.join("meshes/bunny.obj"))
+        .arg("--drop")
+        .arg(d("cut.brdf.json"))
+        .arg("--drop")
+        .arg(&good)
+        .arg("--out")
+        .arg(d("out.brdf.json"))
+        .args(["--quit", "--size", "480x320"])
+        .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run (tools/setup installs xvfb)");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "editor ended: {stderr}");
+    let refusals: Vec<&str> = stderr.lines().filter(|l| l.contains("not loaded")).collect();
+    assert_eq!(refusals.len(), 3, "{stderr}");
+    for (line, name) in refusals.iter().zip(["broken.exr", "missing.obj", "cut.brdf.json"]) {
+        assert!(line.contains(name), "{line}");
+    }
+    let out = Material::load(&d("out.brdf.json")).unwrap();
+    assert!(same_material(&out, &Material::load(&good).unwrap()), "{out:?}");
+}

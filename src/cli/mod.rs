@@ -104,6 +104,10 @@ enum Command {
         /// Paint a strokes file through the window's input path.
         #[arg(long)]
         replay: Option<PathBuf>,
+        /// After the replay, drop these files onto the window in order (maps, meshes, materials), as a
+        /// user would; a file that does not load is a status line and the session goes on.
+        #[arg(long)]
+        drop: Vec<PathBuf>,
         /// Save the window's last frame as PNG.
         #[arg(long)]
         screenshot: Option<PathBuf>,
@@ -214,13 +218,14 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),
-        Some(Command::Edit { env, mesh, material, replay, screenshot, out, quit, converge, size }) => {
+        Some(Command::Edit { env, mesh, material, replay, drop, screenshot, out, quit, converge, size }) => {
             let size = scene::parse_size(&size)?;
             Ok(brdf_shop::editor::run(brdf_shop::editor::Options {
                 env,
                 mesh,
                 material,
                 replay,
+                drop,
                 screenshot,
                 out,
                 quit,

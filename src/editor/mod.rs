@@ -48,6 +48,8 @@ pub struct Options {
     pub mesh: Option<String>,
     pub material: Option<PathBuf>,
     pub replay: Option<PathBuf>,
+    /// Scripted drops: after the replay, these files are dropped onto the window in order.
+    pub drop: Vec<PathBuf>,
     pub screenshot: Option<PathBuf>,
     pub out: Option<PathBuf>,
     pub quit: bool,
@@ -241,6 +243,7 @@ impl App {
                 self.pending.extend(state::stroke_inputs(&state.layout, st));
             }
         }
+        self.pending.extend(self.opts.drop.iter().cloned().map(Input::Dropped));
         self.state = Some(state);
         if self.recovered.is_some() {
             if let Some(s) = self.state.as_mut() {
@@ -267,11 +270,25 @@ impl App {
                 .clone()
                 .or_else(|| self.opts.material.clone())
                 .unwrap_or_else(|| PathBuf::from("material.brdf.json"));
-            state.material().save(&path)?;
-            state.status = format!("saved {}", path.display());
+            // A path that cannot be written is the user's to fix: a status line, the session goes on.
+            state.status = match state.material().save(&path) {
+                Ok(()) => format!("saved {}", path.display()),
+                Err(e) if e.is_user_error() => format!("not saved: {e}"),
+                Err(e) => return Err(e),
+            };
         }
         if let Some(p) = fx.load {
-            self.load_dropped(&p)?;
+            // So is a file that does not load (broken, unknown kind); a device error is not.
+            if let Err(e) = self.load_dropped(&p) {
+                if !e.is_user_error() {
+                    return Err(e);
+                }
+                let line = format!("not loaded: {e}");
+                eprintln!("brdf-shop: {line}");
+                if let Some(state) = self.state.as_mut() {
+                    state.status = line;
+                }
+            }
         }
         if fx.redraw {
             if let Some(g) = &self.gpu {
