@@ -100,6 +100,7 @@ fn replay_through_the_window_equals_paint() {
 fn idle_frames_refine_the_mesh_view() {
     let dir = tempfile::TempDir::new().unwrap();
     let shot = dir.path().join("converged.png");
+    let stats = dir.path().join("frames.json");
     let run = Command::new("xvfb-run")
         .args([
             "-a",
@@ -114,6 +115,8 @@ fn idle_frames_refine_the_mesh_view() {
         ])
         .args(["--size", "256x144", "--screenshot"])
         .arg(&shot)
+        .arg("--frame-stats")
+        .arg(&stats)
         .env("BRDF_SHOP_RECOVERY", dir.path().join("recovery.brdf.json"))
         .output()
         .expect("xvfb-run");
@@ -122,6 +125,22 @@ fn idle_frames_refine_the_mesh_view() {
     assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(spread(&img, (0, 0, 128, 144)) > 2.0, "the mesh view is empty");
+    // --frame-stats: one interaction frame (the first), then 1024 / 16 = 64 refinement frames, each
+    // with its wall time at least its GPU time (the frame waits for its passes) and its passes named.
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let frames = doc["frames"].as_array().unwrap();
+    let kind = |k: &str| frames.iter().filter(|f| f["kind"] == k).count();
+    assert_eq!((kind("interaction"), kind("refinement")), (1, 64), "{doc}");
+    for f in frames {
+        let (wall, gpu) = (f["wall_ms"].as_f64().unwrap(), f["gpu_ms"].as_f64().unwrap());
+        assert!(gpu > 0.0 && wall >= gpu, "{f}");
+        let passes = f["passes"].as_array().unwrap();
+        assert!(passes.iter().any(|p| p["name"] == "canvas"), "{f}");
+        let sum: f64 = passes.iter().map(|p| p["ms"].as_f64().unwrap()).sum();
+        assert!((sum - gpu).abs() <= 1e-9 * gpu, "{f}");
+    }
+    assert_eq!(doc["size"], serde_json::json!([256, 144]));
+    assert_eq!(doc["refinement"]["frames"], 64);
 }
 
 /// Unsaved work is offered back, not forced: a start that finds a recovery file says so and keeps

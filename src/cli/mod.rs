@@ -108,6 +108,10 @@ enum Command {
         /// user would; a file that does not load is a status line and the session goes on.
         #[arg(long)]
         drop: Vec<PathBuf>,
+        /// On exit, write per-frame statistics as JSON: wall ms, GPU ms per pass, interaction or
+        /// refinement frame, and the medians of each kind.
+        #[arg(long)]
+        frame_stats: Option<PathBuf>,
         /// Save the window's last frame as PNG.
         #[arg(long)]
         screenshot: Option<PathBuf>,
@@ -218,7 +222,19 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Demo { out }) => demo::run(&out),
         Some(Command::Devices) => devices::run(),
         Some(Command::Render(args)) => render::run(&args),
-        Some(Command::Edit { env, mesh, material, replay, drop, screenshot, out, quit, converge, size }) => {
+        Some(Command::Edit {
+            env,
+            mesh,
+            material,
+            replay,
+            drop,
+            frame_stats,
+            screenshot,
+            out,
+            quit,
+            converge,
+            size,
+        }) => {
             let size = scene::parse_size(&size)?;
             Ok(brdf_shop::editor::run(brdf_shop::editor::Options {
                 env,
@@ -226,6 +242,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 material,
                 replay,
                 drop,
+                frame_stats,
                 screenshot,
                 out,
                 quit,

@@ -50,6 +50,8 @@ pub struct Options {
     pub replay: Option<PathBuf>,
     /// Scripted drops: after the replay, these files are dropped onto the window in order.
     pub drop: Vec<PathBuf>,
+    /// Write per-frame statistics (wall ms, GPU ms per pass, interaction or refinement) here on exit.
+    pub frame_stats: Option<PathBuf>,
     pub screenshot: Option<PathBuf>,
     pub out: Option<PathBuf>,
     pub quit: bool,
@@ -152,6 +154,10 @@ struct App {
     refine_samples: u32,
     /// Wall-clock milliseconds of each frame drawn (render, compose, present).
     frame_ms: Vec<f64>,
+    /// Every frame's statistics (`--frame-stats`).
+    frame_stats: Vec<FrameStat>,
+    /// What the last frame rendered of the mesh view.
+    last_kind: FrameKind,
     /// The recovery file's material, offered until restored (R) or replaced by an edit.
     recovered: Option<Material>,
     egui_ctx: egui::Context,
@@ -167,6 +173,9 @@ struct App {
 /// Samples per pixel added by each refining frame, and where refinement stops.
 pub const REFINE_STEP: u32 = 16;
 pub const REFINE_MAX: u32 = 1024;
+
+/// How many recent frames the panel's median frame time is taken over.
+pub const FRAME_RATE_WINDOW: usize = 30;
 
 /// The canvas light the editor starts with: the environment's brightest direction seen from the
 /// camera (canvas x = right, y = up, z = towards the viewer).
@@ -326,8 +335,14 @@ impl App {
     /// Renders both views, composes the window's pixels and presents them.
     fn draw(&mut self) -> Result<()> {
         let start = std::time::Instant::now();
+        self.last_kind = FrameKind::Unchanged;
         let r = self.draw_frame();
-        self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.frame_ms.push(wall_ms);
+        if r.is_ok() && self.last_kind != FrameKind::Unchanged {
+            let gpu_ms = self.timings.iter().map(|t| t.1).sum();
+            self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind: self.last_kind, passes: self.timings.clone() });
+        }
         r
     }
 
@@ -369,11 +384,13 @@ impl App {
         let key = format!("{m:?}{:?}{:?}{:?}", mesh_settings.camera, l, self.env.origin);
         let refining = !self.opts.quit || self.opts.converge;
         let mesh_frame = if key != self.refine_key || !refining {
+            self.last_kind = FrameKind::Interaction;
             self.refine_key = key;
             self.refine_samples = 0;
             self.refine_sum.clear();
             gpu.renderer.render(&m, &mesh_settings)?
         } else if self.refine_samples < REFINE_MAX {
+            self.last_kind = FrameKind::Refinement;
             let mis = crate::render::Settings { estimator: Estimator::Mis, spp: REFINE_STEP, ..mesh_settings.clone() };
             gpu.renderer.mis_offset = self.refine_samples;
             let f = gpu.renderer.render(&m, &mis);
@@ -474,6 +491,10 @@ impl App {
             report_updating: report.is_none_or(|r| !r.1),
             timings: &self.timings,
             quality: &quality,
+            frame_ms: (self.frame_ms.len() >= 2).then(|| {
+                let recent = &self.frame_ms[self.frame_ms.len().saturating_sub(FRAME_RATE_WINDOW)..];
+                (crate::measure::stats(recent).0, recent.len())
+            }),
             status: &state.status,
         };
         let mut actions = panel::Actions::default();
@@ -592,8 +613,62 @@ impl App {
             let l = state.layout;
             crate::imageio::write_rgba8_png(p, l.width, l.height, frame)?;
         }
+        if let Some(p) = &self.opts.frame_stats {
+            let device = self.gpu.as_ref().map_or(String::new(), |g| g.renderer.device_name().to_string());
+            let json = frame_stats_json(&device, (state.layout.width, state.layout.height), &self.frame_stats);
+            crate::fsio::write_atomic(p, json.as_bytes())?;
+        }
         Ok(())
     }
+}
+
+/// What a frame rendered of the mesh view: the fast `fis` image after a change (an interaction
+/// frame), `REFINE_STEP` more `mis` samples (a refinement frame), or nothing new.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FrameKind {
+    Interaction,
+    Refinement,
+    Unchanged,
+}
+
+/// One frame for `--frame-stats`.
+struct FrameStat {
+    wall_ms: f64,
+    gpu_ms: f64,
+    kind: FrameKind,
+    passes: Vec<(String, f64)>,
+}
+
+/// `{"device", "size": [W, H], "frames": [{"kind", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
+/// "interaction": {"frames", "median_wall_ms", "median_gpu_ms"}, "refinement": {…}}`.
+fn frame_stats_json(device: &str, size: (u32, u32), frames: &[FrameStat]) -> String {
+    use serde_json::json;
+    let kind_name = |k: FrameKind| match k {
+        FrameKind::Interaction => "interaction",
+        FrameKind::Refinement => "refinement",
+        FrameKind::Unchanged => "unchanged",
+    };
+    let summary = |k: FrameKind| {
+        let wall: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.wall_ms).collect();
+        let gpu: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.gpu_ms).collect();
+        if wall.is_empty() {
+            return json!({ "frames": 0 });
+        }
+        json!({ "frames": wall.len(), "median_wall_ms": crate::measure::stats(&wall).0,
+                "median_gpu_ms": crate::measure::stats(&gpu).0 })
+    };
+    let list: Vec<_> = frames
+        .iter()
+        .map(|f| {
+            json!({ "kind": kind_name(f.kind), "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
+                    "passes": f.passes.iter().map(|(n, ms)| json!({ "name": n, "ms": ms })).collect::<Vec<_>>() })
+        })
+        .collect();
+    let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
+                      "interaction": summary(FrameKind::Interaction), "refinement": summary(FrameKind::Refinement) });
+    let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
+    s.push('\n');
+    s
 }
 
 /// Scales the mesh view so the environment's mean radiance shows as mid grey.
@@ -908,6 +983,8 @@ pub fn run(opts: Options) -> Result<()> {
         refine_sum: Vec::new(),
         refine_samples: 0,
         frame_ms: Vec::new(),
+        frame_stats: Vec::new(),
+        last_kind: FrameKind::Unchanged,
         recovered,
         egui_ctx: egui::Context::default(),
         egui_state: None,

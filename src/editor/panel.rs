@@ -38,6 +38,8 @@ pub struct Info<'a> {
     pub report_updating: bool,
     pub timings: &'a [(String, f64)],
     pub quality: &'a str,
+    /// The median wall time of the recent frames and how many they are.
+    pub frame_ms: Option<(f64, usize)>,
     pub status: &'a str,
 }
 
@@ -178,6 +180,9 @@ pub fn show(
             ui.add(egui::Slider::new(exposure, 0.05..=20.0).logarithmic(true).text("exposure"));
             ui.checkbox(log_graph, "graph in log scale (G)");
             ui.label(info.quality);
+            if let Some((ms, n)) = info.frame_ms {
+                ui.label(format!("frame: median {ms:.1} ms ({:.1} fps) over {n} frames", 1e3 / ms.max(1e-3)));
+            }
             for (name, ms) in info.timings {
                 ui.monospace(format!("{name:<24} {ms:8.2} ms"));
             }
