@@ -68,6 +68,7 @@ fn replay_through_the_window_equals_paint() {
         .output()
         .expect("xvfb-run (tools/setup installs xvfb)");
     assert!(run.status.success(), "editor failed: {}", String::from_utf8_lossy(&run.stderr));
+    assert!(!String::from_utf8_lossy(&run.stderr).contains("panicked"), "{}", String::from_utf8_lossy(&run.stderr));
     let paint = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
         .args(["paint", "--strokes"])
         .arg(&strokes)
@@ -123,6 +124,7 @@ fn idle_frames_refine_the_mesh_view() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "a thread panicked: {stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(spread(&img, (0, 0, 128, 144)) > 2.0, "the mesh view is empty");
     // --frame-stats: one interaction frame (the first), then 1024 / 16 = 64 refinement frames, each
@@ -322,6 +324,7 @@ fn dropped_files_that_do_not_load_do_not_end_the_session() {
         .expect("xvfb-run (tools/setup installs xvfb)");
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "editor ended: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
     let refusals: Vec<&str> = stderr.lines().filter(|l| l.contains("not loaded")).collect();
     assert_eq!(refusals.len(), 3, "{stderr}");
     for (line, name) in refusals.iter().zip(["broken.exr", "missing.obj", "cut.brdf.json"]) {

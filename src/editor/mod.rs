@@ -25,7 +25,7 @@ use gpu_allocator::MemoryLocation;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::event_loop::{ActiveEventLoop, EventLoop, EventLoopProxy};
 use winit::keyboard::{Key, ModifiersState};
 use winit::window::{Window, WindowId};
 
@@ -165,6 +165,9 @@ struct App {
     spp: u32,
     /// The energy report of the material shown, measured off the UI thread (made with the window).
     report: Option<report::ReportWorker>,
+    /// Wakes the event loop from the report's thread (a window's `request_redraw` from another
+    /// thread panics in winit's X11 backend once the loop has closed; a proxy returns an error).
+    proxy: EventLoopProxy<()>,
     timings: Vec<(String, f64)>,
     /// A panel widget was being dragged last frame: its edits amend one history step.
     panel_dragging: bool,
@@ -470,9 +473,12 @@ impl App {
         ));
         self.timings = mesh_frame.timings.iter().chain(&canvas_frame.timings).map(|t| (t.name.clone(), t.ms)).collect();
         // The tool panel: run egui on this frame's input, apply what the user did after drawing.
+        let proxy = self.proxy.clone();
         let worker = self.report.get_or_insert_with(|| {
-            let window = gpu.window.clone();
-            report::ReportWorker::new(move || window.request_redraw())
+            report::ReportWorker::new(move || {
+                // After the loop has closed nobody needs the report: the error is the answer.
+                let _ = proxy.send_event(());
+            })
         });
         worker.request(&m);
         let report = worker.latest(&m);
@@ -802,6 +808,13 @@ fn key_input(key: &Key, mods: ModifiersState) -> Option<Input> {
 }
 
 impl ApplicationHandler for App {
+    /// A report finished on the worker thread: show it.
+    fn user_event(&mut self, _el: &ActiveEventLoop, _event: ()) {
+        if let Some(g) = &self.gpu {
+            g.window.request_redraw();
+        }
+    }
+
     fn resumed(&mut self, el: &ActiveEventLoop) {
         if self.gpu.is_none() {
             if let Err(e) = self.init(el) {
@@ -963,6 +976,7 @@ pub fn run(opts: Options) -> Result<()> {
         Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
     })?;
     let mut app = App {
+        proxy: event_loop.create_proxy(),
         opts,
         env_summary: EnvSummary::of(&env),
         env,
