@@ -15,6 +15,7 @@ pub mod editor;
 pub mod error;
 pub mod fsio;
 pub mod imageio;
+pub mod interrupt;
 pub mod measure;
 pub mod reference;
 pub mod render;

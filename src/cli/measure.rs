@@ -13,6 +13,9 @@ fn renderer() -> anyhow::Result<Renderer> {
 }
 
 pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(p) = json {
+        brdf_shop::fsio::check_output("--json", p)?;
+    }
     let mut plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     // Refused before the device starts: a missing map leaves nothing written.
@@ -30,6 +33,7 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
 }
 
 pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Result<()> {
+    brdf_shop::fsio::check_output_dir("--out", out)?;
     let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
@@ -43,6 +47,9 @@ pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Re
 }
 
 pub fn stability(quick: bool, out: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(p) = out {
+        brdf_shop::fsio::check_output("--out", p)?;
+    }
     let mut r = renderer()?;
     let cases = stability::run(&mut r, quick)?;
     let text = stability::table(&cases, r.device_name());

@@ -27,8 +27,8 @@ impl Mesh {
     /// type, a sparse accessor, an index out of range, a non-finite coordinate, a node hierarchy that
     /// is not a tree, and a scene without triangles.
     pub fn load_gltf(path: &Path) -> Result<Mesh> {
-        let origin = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let origin = crate::fsio::show(path);
+        let bytes = crate::fsio::read_limited(path, super::MAX_MESH_FILE_BYTES, "a mesh file")?;
         let g = ::gltf::Gltf::from_slice(&bytes)
             .map_err(|e| Error::input(&origin, format!("not a readable glTF 2.0 file: {e}")))?;
         let dir = path.parent().unwrap_or(Path::new(""));
@@ -267,7 +267,8 @@ impl Loader<'_> {
                             buf.length()
                         ));
                     }
-                    std::fs::read(&file).map_err(|e| format!("buffer {i}: {}: {e}", file.display()))?
+                    crate::fsio::read_limited(&file, super::MAX_MESH_FILE_BYTES, "a glTF buffer")
+                        .map_err(|e| format!("buffer {i}: {e}"))?
                 }
             };
             if data.len() < buf.length() {

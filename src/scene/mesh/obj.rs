@@ -1,4 +1,4 @@
-//! Wavefront OBJ through `tobj`.
+//! Wavefront OBJ through `tobj`, after [`surfaces_only`] has taken out what has no surface.
 
 use std::path::Path;
 
@@ -13,9 +13,16 @@ impl Mesh {
     /// file) a file that is not OBJ, has no triangles, uses a vertex it does not have, has a
     /// non-finite coordinate, or has all its vertices at one point.
     pub fn load_obj(path: &Path) -> Result<Mesh> {
-        let origin = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+        let origin = crate::fsio::show(path);
+        let bytes = crate::fsio::read_limited(path, super::MAX_MESH_FILE_BYTES, "a mesh file")?;
+        let bytes = surfaces_only(&bytes).map_err(|m| Error::input(&origin, m))?;
+        let options = tobj::LoadOptions {
+            triangulate: true,
+            single_index: true,
+            ignore_points: true,
+            ignore_lines: true,
+            ..Default::default()
+        };
         // Materials are not used: a `mtllib` line neither fails the load nor opens another file.
         let (models, _) =
             tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
@@ -61,4 +68,27 @@ impl Mesh {
         let normals = all_have_normals.then_some(normals);
         Mesh::from_triangles(&origin, file_name(path), positions, normals, indices)
     }
+}
+
+/// The OBJ text with its line (`l`) and point (`p`) elements blanked (they have no surface; `tobj`
+/// would read `l a b c` as a triangle and blow up shorter ones into zero-area triangles), line
+/// numbers kept. A face (`f`) of fewer than three vertices is refused, naming its line.
+pub(crate) fn surfaces_only(bytes: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let mut out = Vec::with_capacity(bytes.len());
+    for (no, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"l") | Some(b"p") => {}
+            Some(b"f") => {
+                let n = words.count();
+                if n < 3 {
+                    return Err(format!("line {}: a face needs at least three vertices, got {n}", no + 1));
+                }
+                out.extend_from_slice(line);
+            }
+            _ => out.extend_from_slice(line),
+        }
+        out.push(b'\n');
+    }
+    Ok(out)
 }
