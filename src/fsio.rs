@@ -35,6 +35,26 @@ pub fn quote(s: &str) -> String {
     out
 }
 
+/// `msg` with control characters escaped and every word (run without a space) longer than `max`
+/// characters cut to `max`, with its length in bytes: for messages of other crates that echo a value
+/// whole (serde's `unknown field `…``, `invalid type: string "…"`).
+pub fn shorten_words(msg: &str, max: usize) -> String {
+    let escaped = escape_controls(msg);
+    let mut out = String::with_capacity(escaped.len().min(4096));
+    for (k, word) in escaped.split(' ').enumerate() {
+        if k > 0 {
+            out.push(' ');
+        }
+        if word.chars().count() > max {
+            out.extend(word.chars().take(max));
+            out.push_str(&format!("…({} bytes)", word.len()));
+        } else {
+            out.push_str(word);
+        }
+    }
+    out
+}
+
 /// Escapes control characters of a whole message (which stays as long as it is).
 pub fn escape_controls(s: &str) -> String {
     let mut out = String::with_capacity(s.len());

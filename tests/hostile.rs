@@ -111,7 +111,9 @@ fn run_with(args: &[&str], input: Input, mem_kib: u64, secs: u64, envs: &[(&str,
         Input::Stream { pattern, total } => {
             let mut pipe = child.stdin.take().expect("piped");
             Some(std::thread::spawn(move || {
-                let chunk: Vec<u8> = pattern.iter().copied().cycle().take(1 << 20).collect();
+                // Whole copies of the pattern, so that lines are not cut between chunks.
+                let copies = ((1usize << 20) / pattern.len()).max(1);
+                let chunk: Vec<u8> = pattern.iter().copied().cycle().take(copies * pattern.len()).collect();
                 let mut sent = 0u64;
                 while sent < total {
                     // A refusal stops reading: the broken pipe ends the stream.
@@ -231,7 +233,8 @@ fn listing(dir: &Path) -> Vec<String> {
 }
 
 fn material_json(lobes: usize) -> Value {
-    let lobe = json!({ "albedo": [0.5 / lobes.max(1) as f64; 3], "alpha_x": 0.2, "alpha_y": 0.2 });
+    let a = 0.5 / lobes.max(1) as f64;
+    let lobe = json!({ "albedo": [a, a, a], "alpha_x": 0.2, "alpha_y": 0.2 });
     json!({
         "format": "brdf-shop/material",
         "version": 2,
@@ -653,8 +656,8 @@ fn messages_quote_short_and_escape_controls() {
     m["lobes"][0]["alpha_x"] = json!(huge.clone());
     let mp = write_material(d, "alpha.brdf.json", &m);
     refused(&cpu(&["check", "--material", s(&mp)]), 1, &[s(&mp), "alpha_x"]);
-    // Control characters and long values in flags (1 MB: within the command line's limit).
-    let long = "9".repeat(1 << 20);
+    // Control characters and long values in flags (100 kB: one argument may hold at most 128 KiB).
+    let long = "9".repeat(100_000);
     let cases: &[(&[&str], &str)] = &[
         (&["reference", "--view", "canvas", "--size", "3\u{1b}[31mx4", "--out", s(&out)], "--size"),
         (&["reference", "--view", "canvas", "--size", &format!("{long}x4"), "--out", s(&out)], "--size"),

@@ -106,16 +106,17 @@ pub(crate) fn parse_json<'de, T: Deserialize<'de>>(text: &'de str, origin: &str)
     let de = &mut serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
         let path = e.path().to_string();
-        let inner = e.into_inner();
+        // serde echoes values and unknown names whole: cut to what a message quotes.
+        let inner = crate::fsio::shorten_words(&e.into_inner().to_string(), crate::fsio::QUOTE_CHARS);
         // `?` is serde_path_to_error's unknown segment (e.g. end of file): it names no field.
         if path == "." || path == "?" || path.is_empty() {
-            Error::input(origin, inner.to_string())
+            Error::input(origin, inner)
         } else {
-            Error::input(origin, format!("{path}: {inner}"))
+            Error::input(origin, format!("{}: {inner}", crate::fsio::quote(&path)))
         }
     })?;
     // Anything after the JSON value (a second object, stray text) makes the file invalid.
-    de.end().map_err(|e| Error::input(origin, e.to_string()))?;
+    de.end().map_err(|e| Error::input(origin, crate::fsio::shorten_words(&e.to_string(), crate::fsio::QUOTE_CHARS)))?;
     Ok(value)
 }
 

@@ -193,20 +193,7 @@ const MAX_WORD_CHARS: usize = 240;
 /// One line for stderr: control characters escaped (line breaks included), each over-long word cut
 /// to [`MAX_WORD_CHARS`] with its length in bytes.
 pub fn tidy_message(msg: &str) -> String {
-    let escaped = brdf_shop::fsio::escape_controls(&msg.replace('\n', " "));
-    let mut out = String::with_capacity(escaped.len().min(4096));
-    for (k, word) in escaped.split(' ').enumerate() {
-        if k > 0 {
-            out.push(' ');
-        }
-        if word.chars().count() > MAX_WORD_CHARS {
-            out.extend(word.chars().take(MAX_WORD_CHARS));
-            out.push_str(&format!("…({} bytes)", word.len()));
-        } else {
-            out.push_str(word);
-        }
-    }
-    out
+    brdf_shop::fsio::shorten_words(&msg.replace('\n', " "), MAX_WORD_CHARS)
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
