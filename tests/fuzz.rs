@@ -8,7 +8,7 @@
 //!
 //! Case counts are bounded so the whole file runs in well under a minute in the test profile
 //! (`CASES` per target); the seed is fixed (13) so CI is reproducible, and `PROPTEST_RNG_SEED=N`
-//! explores other inputs. Inputs that ever crashed a parser are kept in `tests/corpus/` and replayed
+//! with `BRDF_SHOP_FUZZ_CASES=N` explores other and more inputs. Inputs that ever crashed a parser are kept in `tests/corpus/` and replayed
 //! by [`corpus_regressions`].
 
 use std::io::Write as _;
@@ -21,13 +21,15 @@ use brdf_shop::scene::{Environment, Mesh};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
-/// Cases per in-process target: about 0.1–5 ms each in the test profile.
-const CASES: u32 = 600;
+/// Cases per in-process target: 1500 × 8 targets take about 10 s on the 2-core machine (test
+/// profile). `BRDF_SHOP_FUZZ_CASES=N` runs N per target instead (longer fuzzing sessions).
+const CASES: u32 = 1500;
 /// Cases for `eval` through the binary (a process each, about 20 ms).
-const EVAL_CASES: u32 = 48;
+const EVAL_CASES: u32 = 64;
 
 fn config(cases: u32) -> Config {
     let seed = std::env::var("PROPTEST_RNG_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(13);
+    let cases = std::env::var("BRDF_SHOP_FUZZ_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(cases);
     Config { cases, failure_persistence: None, rng_seed: RngSeed::Fixed(seed), ..Config::default() }
 }
 
