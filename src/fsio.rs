@@ -23,14 +23,12 @@ pub const QUOTE_CHARS: usize = 80;
 /// cut to [`QUOTE_CHARS`] characters with `…` and the full length in bytes when longer.
 pub fn quote(s: &str) -> String {
     let mut out = String::new();
-    let mut shown = 0usize;
-    for c in s.chars() {
+    for (shown, c) in s.chars().enumerate() {
         if shown == QUOTE_CHARS {
             out.push_str(&format!("… ({} bytes in all)", s.len()));
             return out;
         }
         escape_char(c, &mut out);
-        shown += 1;
     }
     out
 }

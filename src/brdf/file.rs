@@ -201,7 +201,7 @@ impl Material {
             // length overflows (components near 1e154 and above) still normalises.
             let big = [w, x, y, z].iter().fold(0.0f64, |a, c| a.max(c.abs()));
             let len = q.length();
-            if !(big.is_finite() && big > 0.0) || !((q / big).length() * big > 1e-12) {
+            if !(big.is_finite() && big > 0.0 && (q / big).length() * big > 1e-12) {
                 return Err(Error::input(
                     origin,
                     format!("lobes[{k}].rotation: a quaternion of length {len} cannot be normalised"),

@@ -16,13 +16,8 @@ impl Mesh {
         let origin = crate::fsio::show(path);
         let bytes = crate::fsio::read_limited(path, super::MAX_MESH_FILE_BYTES, "a mesh file")?;
         let bytes = surfaces_only(&bytes).map_err(|m| Error::input(&origin, m))?;
-        let options = tobj::LoadOptions {
-            triangulate: true,
-            single_index: true,
-            ignore_points: true,
-            ignore_lines: true,
-            ..Default::default()
-        };
+        let options =
+            tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
         // Materials are not used: a `mtllib` line neither fails the load nor opens another file.
         let (models, _) =
             tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))
