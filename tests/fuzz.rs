@@ -24,8 +24,8 @@ use proptest::test_runner::{Config, RngSeed};
 /// Cases per in-process target: 1500 × 8 targets take about 10 s on the 2-core machine (test
 /// profile). `BRDF_SHOP_FUZZ_CASES=N` runs N per target instead (longer fuzzing sessions).
 const CASES: u32 = 1500;
-/// Cases for `eval` through the binary (a process each, about 20 ms).
-const EVAL_CASES: u32 = 64;
+/// Cases for `eval` through the binary (a process each, about 5 ms).
+const EVAL_CASES: u32 = 256;
 
 fn config(cases: u32) -> Config {
     let seed = std::env::var("PROPTEST_RNG_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(13);
