@@ -17,9 +17,31 @@ pub fn srgb8(v: f64, exposure: f64) -> u8 {
     (s * 255.0 + 0.5) as u8
 }
 
+/// Radiance that overflowed `f32` (±Inf) becomes `±f32::MAX`, the largest finite value, and NaN
+/// becomes 0; the number of channel values changed is returned for the command to report. An output
+/// file never holds a non-finite value.
+pub fn clamp_to_finite(pixels: &mut [[f32; 4]]) -> usize {
+    let mut changed = 0;
+    for p in pixels.iter_mut() {
+        for v in p.iter_mut() {
+            if !v.is_finite() {
+                *v = if v.is_nan() { 0.0 } else { f32::MAX.copysign(*v) };
+                changed += 1;
+            }
+        }
+    }
+    changed
+}
+
 /// Writes `.exr` (linear float RGBA) or `.png` (exposure + sRGB) by the path's extension.
 pub fn write(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> Result<()> {
-    let origin = path.display().to_string();
+    write_atomic(path, &encode(path, width, height, pixels, exposure)?)
+}
+
+/// The bytes [`write`] writes, to be written later with other outputs
+/// ([`crate::fsio::write_all_atomic`]). Non-finite values are clamped as [`clamp_to_finite`] says.
+pub fn encode(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> Result<Vec<u8>> {
+    let origin = crate::fsio::show(path);
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = match ext.as_deref() {
         Some("exr") => {
@@ -29,7 +51,7 @@ pub fn write(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure
             .map_err(|e| Error::input(&origin, format!("cannot encode PNG: {e}")))?,
         _ => return Err(Error::input(origin, "the output must end in .exr or .png")),
     };
-    write_atomic(path, &bytes)
+    Ok(bytes)
 }
 
 /// Whether `path` names an output format this module writes.
@@ -44,7 +66,8 @@ fn exr_bytes(width: u32, height: u32, pixels: &[[f32; 4]]) -> std::result::Resul
     let w = width as usize;
     let channels = SpecificChannels::rgba(|pos: exr::math::Vec2<usize>| {
         let p = pixels[pos.y() * w + pos.x()];
-        (p[0], p[1], p[2], p[3])
+        let f = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(-f32::MAX, f32::MAX) };
+        (f(p[0]), f(p[1]), f(p[2]), f(p[3]))
     });
     let layer =
         Layer::new((w, height as usize), LayerAttributes::named("brdf-shop"), Encoding::FAST_LOSSLESS, channels);

@@ -16,6 +16,7 @@ pub mod error;
 pub mod export;
 pub mod fsio;
 pub mod imageio;
+pub mod interrupt;
 pub mod measure;
 pub mod reference;
 pub mod render;

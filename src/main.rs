@@ -18,6 +18,10 @@ fn main() -> ExitCode {
     match cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<cli::NotPhysicallyCorrect>().is_some() => ExitCode::from(3),
+        Err(e) if e.downcast_ref::<brdf_shop::interrupt::Interrupted>().is_some() => {
+            eprintln!("brdf-shop: {e}");
+            ExitCode::from(brdf_shop::interrupt::EXIT_STATUS)
+        }
         Err(e) => {
             let user = e.chain().any(|c| c.downcast_ref::<brdf_shop::Error>().is_some_and(|e| e.is_user_error()))
                 || e.downcast_ref::<cli::UsageError>().is_some();
@@ -33,8 +37,7 @@ fn main() -> ExitCode {
                     msg.push_str(&text);
                 }
             }
-            let msg = msg.replace('\n', " ");
-            eprintln!("brdf-shop: {msg}");
+            eprintln!("brdf-shop: {}", cli::tidy_message(&msg));
             ExitCode::from(if user { 1 } else { 2 })
         }
     }

@@ -14,6 +14,37 @@ use super::sampling::{self, MaterialSampler};
 use super::ward::Normalization;
 use crate::rng::Pcg32;
 
+/// The most Monte Carlo samples per view direction `check` takes (`--samples`): 50× the default.
+/// Each costs one mixture sample and weight (O(lobes)) at each of up to 288 views, so 10⁶ samples
+/// of a few lobes take about half a minute on two cores.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
+/// The most direction pairs of the reciprocity error (`--pairs`): 50× the default, two evaluations
+/// each, a few seconds for a few lobes.
+pub const MAX_PAIRS: usize = 10_000_000;
+
+/// Units of work between two looks at [`Watch::stop`].
+const CHUNK: usize = 4096;
+
+/// How a long measurement shows progress and is stopped: `advance(n)` after `n` units of work (a
+/// sample, a quadrature cell, a pair); `stop()` returning true ends it early (the result is then
+/// `None`). [`Watch::NONE`] does neither.
+#[derive(Clone, Copy)]
+pub struct Watch<'a> {
+    pub advance: &'a (dyn Fn(u64) + Sync),
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+}
+
+fn no_advance(_: u64) {}
+
+fn never() -> bool {
+    false
+}
+
+impl Watch<'static> {
+    pub const NONE: Watch<'static> = Watch { advance: &no_advance, stop: &never };
+}
+
 /// A Monte Carlo estimate per channel with its standard error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
@@ -28,11 +59,22 @@ pub fn direction(theta: f64, phi: f64) -> DVec3 {
 
 /// `a(ω_o)` from `n` samples of the material's mixture sampler, seeded by `seed`.
 pub fn directional_albedo(m: &Material, wo: DVec3, n: usize, seed: u64) -> Estimate {
+    directional_albedo_watched(m, wo, n, seed, Watch::NONE).expect("never stopped")
+}
+
+/// [`directional_albedo`] under a [`Watch`] (one unit per sample; `None` when stopped).
+pub fn directional_albedo_watched(m: &Material, wo: DVec3, n: usize, seed: u64, watch: Watch<'_>) -> Option<Estimate> {
     let sampler = MaterialSampler::new(m, wo);
     let mut rng = Pcg32::new(seed, 0x5eed);
     let mut sum = [0.0f64; 3];
     let mut sum2 = [0.0f64; 3];
-    for _ in 0..n {
+    for k in 0..n {
+        if k % CHUNK == 0 {
+            if (watch.stop)() {
+                return None;
+            }
+            (watch.advance)(CHUNK.min(n - k) as u64);
+        }
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
         let w = match sampler.sample(u0, 1.0 - u1, u2) {
             Some(wi) => sampler.weight(wi),
@@ -46,7 +88,7 @@ pub fn directional_albedo(m: &Material, wo: DVec3, n: usize, seed: u64) -> Estim
     let nf = n as f64;
     let value = sum.map(|s| s / nf);
     let std_err = [0, 1, 2].map(|c| ((sum2[c] / nf - value[c] * value[c]).max(0.0) / (nf - 1.0)).sqrt());
-    Estimate { value, std_err }
+    Some(Estimate { value, std_err })
 }
 
 /// The largest directional albedo found, where, and how sure.
@@ -68,24 +110,38 @@ pub const THETA_SET_DEG: [f64; 24] = [
 /// The maximum of `a(ω_o)` over [`THETA_SET_DEG`] × 12 azimuths (one azimuth when the material is
 /// isotropic and unrotated), `n` samples per direction.
 pub fn max_directional_albedo(m: &Material, n: usize) -> MaxAlbedo {
+    max_directional_albedo_watched(m, n, Watch::NONE).expect("never stopped")
+}
+
+/// The view directions [`max_directional_albedo`] measures.
+fn albedo_directions(m: &Material) -> Vec<(f64, f64)> {
     let symmetric_in_phi = m.lobes.iter().all(|l| !l.is_anisotropic() && !l.is_rotated());
     let phis: Vec<f64> = if symmetric_in_phi { vec![0.0] } else { (0..12).map(|i| i as f64 * 30.0).collect() };
-    let dirs: Vec<(f64, f64)> = THETA_SET_DEG.iter().flat_map(|&t| phis.iter().map(move |&p| (t, p))).collect();
+    THETA_SET_DEG.iter().flat_map(|&t| phis.iter().map(move |&p| (t, p))).collect()
+}
+
+/// [`max_directional_albedo`] under a [`Watch`] (`None` when stopped).
+pub fn max_directional_albedo_watched(m: &Material, n: usize, watch: Watch<'_>) -> Option<MaxAlbedo> {
+    let dirs = albedo_directions(m);
     dirs.par_iter()
         .enumerate()
         .map(|(i, &(t, p))| {
-            let e = directional_albedo(m, direction(t.to_radians(), p.to_radians()), n, i as u64);
+            let e = directional_albedo_watched(m, direction(t.to_radians(), p.to_radians()), n, i as u64, watch)?;
             let c = (1..3).fold(0, |best, c| if e.value[c] > e.value[best] { c } else { best });
-            MaxAlbedo { value: e.value[c], std_err: e.std_err[c], channel: c, theta_deg: t, phi_deg: p }
+            Some(MaxAlbedo { value: e.value[c], std_err: e.std_err[c], channel: c, theta_deg: t, phi_deg: p })
         })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .fold(MaxAlbedo { value: f64::NEG_INFINITY, std_err: 0.0, channel: 0, theta_deg: 0.0, phi_deg: 0.0 }, |a, b| {
-            if b.value > a.value {
-                b
-            } else {
-                a
-            }
+        .collect::<Option<Vec<_>>>()
+        .map(|all| {
+            all.into_iter().fold(
+                MaxAlbedo { value: f64::NEG_INFINITY, std_err: 0.0, channel: 0, theta_deg: 0.0, phi_deg: 0.0 },
+                |a, b| {
+                    if b.value > a.value {
+                        b
+                    } else {
+                        a
+                    }
+                },
+            )
         })
 }
 
@@ -130,16 +186,35 @@ pub fn facet_albedo(m: &Material, wo: DVec3, n: usize) -> [f64; 3] {
 /// deterministic quadrature ([`FACET_GRID`]² cells per term). `std_err` carries the quadrature's
 /// error estimate at the maximum, `|A(n) − A(n/2)|`.
 pub fn facet_max_albedo(m: &Material) -> MaxAlbedo {
-    let dirs: Vec<(f64, f64)> =
-        THETA_SET_DEG.iter().flat_map(|&t| (0..12).map(move |i| (t, i as f64 * 30.0))).collect();
+    facet_max_albedo_watched(m, Watch::NONE).expect("never stopped")
+}
+
+/// The view directions of [`facet_max_albedo`].
+fn facet_directions() -> Vec<(f64, f64)> {
+    THETA_SET_DEG.iter().flat_map(|&t| (0..12).map(move |i| (t, i as f64 * 30.0))).collect()
+}
+
+/// Units of work of [`facet_max_albedo_watched`]: one per view direction and lobe.
+fn facet_work(m: &Material) -> u64 {
+    (facet_directions().len() * m.lobes.len().max(1)) as u64
+}
+
+/// [`facet_max_albedo`] under a [`Watch`] (one unit per view direction and lobe; `None` when
+/// stopped).
+pub fn facet_max_albedo_watched(m: &Material, watch: Watch<'_>) -> Option<MaxAlbedo> {
+    let dirs = facet_directions();
     let best = dirs
         .par_iter()
         .map(|&(t, p)| {
+            if (watch.stop)() {
+                return None;
+            }
             let a = facet_albedo(m, direction(t.to_radians(), p.to_radians()), FACET_GRID);
+            (watch.advance)(m.lobes.len().max(1) as u64);
             let c = (1..3).fold(0, |best, c| if a[c] > a[best] { c } else { best });
-            MaxAlbedo { value: a[c], std_err: 0.0, channel: c, theta_deg: t, phi_deg: p }
+            Some(MaxAlbedo { value: a[c], std_err: 0.0, channel: c, theta_deg: t, phi_deg: p })
         })
-        .collect::<Vec<_>>()
+        .collect::<Option<Vec<_>>>()?
         .into_iter()
         .fold(None::<MaxAlbedo>, |a, b| match a {
             Some(a) if a.value >= b.value => Some(a),
@@ -147,7 +222,7 @@ pub fn facet_max_albedo(m: &Material) -> MaxAlbedo {
         })
         .expect("the view set is not empty");
     let coarse = facet_albedo(m, direction(best.theta_deg.to_radians(), best.phi_deg.to_radians()), FACET_GRID / 2);
-    MaxAlbedo { std_err: (best.value - coarse[best.channel]).abs(), ..best }
+    Some(MaxAlbedo { std_err: (best.value - coarse[best.channel]).abs(), ..best })
 }
 
 /// Uniform direction on the upper hemisphere.
@@ -173,12 +248,23 @@ pub struct Reciprocity {
 /// [`Reciprocity`] over `n` pairs (the maximum over channels): half uniform on the hemisphere, half
 /// with `a` importance-sampled about `b` so that sharp lobes are hit.
 pub fn reciprocity(m: &Material, n: usize, seed: u64) -> Reciprocity {
+    reciprocity_watched(m, n, seed, Watch::NONE).expect("never stopped")
+}
+
+/// [`reciprocity`] under a [`Watch`] (one unit per pair; `None` when stopped).
+pub fn reciprocity_watched(m: &Material, n: usize, seed: u64, watch: Watch<'_>) -> Option<Reciprocity> {
     let mut rng = Pcg32::new(seed, 0xec1);
     let mut max_diff = [0.0f64; 3];
     let mut max_f = [0.0f64; 3];
     let mut sum_diff = [0.0f64; 3];
     let mut sum_f = [0.0f64; 3];
     for i in 0..n {
+        if i % CHUNK == 0 {
+            if (watch.stop)() {
+                return None;
+            }
+            (watch.advance)(CHUNK.min(n - i) as u64);
+        }
         let b = uniform_hemisphere(rng.next_f64(), rng.next_f64());
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
         let uniform = i % 2 == 0;
@@ -205,7 +291,7 @@ pub fn reciprocity(m: &Material, n: usize, seed: u64) -> Reciprocity {
     let ratio = |num: [f64; 3], den: [f64; 3]| {
         (0..3).map(|c| if den[c] > 0.0 { num[c] / den[c] } else { 0.0 }).fold(0.0, f64::max)
     };
-    Reciprocity { max_rel: ratio(max_diff, max_f), mean_rel: ratio(sum_diff, sum_f) }
+    Some(Reciprocity { max_rel: ratio(max_diff, max_f), mean_rel: ratio(sum_diff, sum_f) })
 }
 
 /// `max |f(a,b) − f(b,a)| / max f` over `n` pairs; see [`reciprocity`].
@@ -243,13 +329,33 @@ pub const RECIPROCITY_EXACT: f64 = 1.0e-12;
 
 impl Report {
     pub fn measure(m: &Material, samples: usize, pairs: usize) -> Report {
+        Report::measure_watched(m, samples, pairs, Watch::NONE).expect("never stopped")
+    }
+
+    /// The units of work [`Report::measure_watched`] advances its [`Watch`] by in all.
+    pub fn work(m: &Material, samples: usize, pairs: usize) -> u64 {
+        let albedo = if m.normalization == Normalization::Reciprocal {
+            facet_work(m)
+        } else {
+            (albedo_directions(m).len() * samples) as u64
+        };
+        albedo + pairs as u64
+    }
+
+    /// [`Report::measure`] under a [`Watch`]; `None` when stopped.
+    pub fn measure_watched(m: &Material, samples: usize, pairs: usize, watch: Watch<'_>) -> Option<Report> {
         let exact = m.normalization == Normalization::Reciprocal;
-        Report {
+        let max_albedo = if exact {
+            facet_max_albedo_watched(m, watch)?
+        } else {
+            max_directional_albedo_watched(m, samples, watch)?
+        };
+        Some(Report {
             sums: m.energy_sums(),
             bound: if exact { AlbedoBound::Exact } else { AlbedoBound::Measured },
-            max_albedo: if exact { facet_max_albedo(m) } else { max_directional_albedo(m, samples) },
-            reciprocity: reciprocity(m, pairs, 1),
-        }
+            max_albedo,
+            reciprocity: reciprocity_watched(m, pairs, 1, watch)?,
+        })
     }
 
     /// The upper bound of the maximum directional albedo: the largest channel sum for the reciprocal

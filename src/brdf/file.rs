@@ -13,12 +13,17 @@ use std::path::Path;
 use glam::DQuat;
 use serde::{Deserialize, Serialize};
 
-use super::material::{Lobe, Material, ALPHA_MAX, ALPHA_MIN};
+use super::material::{Lobe, Material, ALPHA_MAX, ALPHA_MIN, MAX_LOBES};
 use super::ward::Normalization;
 use crate::error::{Error, Result};
 
 pub const MATERIAL_FORMAT: &str = "brdf-shop/material";
 pub const MATERIAL_VERSION: u32 = 2;
+
+/// The largest material or strokes file read (bytes), checked before it is read: a material of
+/// [`MAX_LOBES`] lobes is about 100 kB and a long editor session's strokes a few MB, so 16 MiB is
+/// ample while keeping the parsed document (a few times the text) well under a gigabyte.
+pub const MAX_JSON_BYTES: u64 = 16 << 20;
 
 /// The construction a version-2 file's lobes follow.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -101,23 +106,27 @@ pub(crate) fn parse_json<'de, T: Deserialize<'de>>(text: &'de str, origin: &str)
     let de = &mut serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
         let path = e.path().to_string();
-        let inner = e.into_inner();
+        // serde echoes values and unknown names whole: cut to what a message quotes.
+        let inner = crate::fsio::shorten_words(&e.into_inner().to_string(), crate::fsio::QUOTE_CHARS);
         // `?` is serde_path_to_error's unknown segment (e.g. end of file): it names no field.
         if path == "." || path == "?" || path.is_empty() {
-            Error::input(origin, inner.to_string())
+            Error::input(origin, inner)
         } else {
-            Error::input(origin, format!("{path}: {inner}"))
+            Error::input(origin, format!("{}: {inner}", crate::fsio::quote(&path)))
         }
     })?;
     // Anything after the JSON value (a second object, stray text) makes the file invalid.
-    de.end().map_err(|e| Error::input(origin, e.to_string()))?;
+    de.end().map_err(|e| Error::input(origin, crate::fsio::shorten_words(&e.to_string(), crate::fsio::QUOTE_CHARS)))?;
     Ok(value)
 }
 
 /// Checks the `format` tag and that `version` is one of `1..=newest`.
 pub(crate) fn check_format(origin: &str, format: &str, want: &str, version: u32, newest: u32) -> Result<()> {
     if format != want {
-        return Err(Error::input(origin, format!("format: expected \"{want}\", got \"{format}\"")));
+        return Err(Error::input(
+            origin,
+            format!("format: expected \"{want}\", got \"{}\"", crate::fsio::quote(format)),
+        ));
     }
     if !(1..=newest).contains(&version) {
         let reads = if newest == 1 { "version 1".to_owned() } else { format!("versions 1 to {newest}") };
@@ -143,6 +152,12 @@ const CHANNELS: [&str; 3] = ["red", "green", "blue"];
 impl Material {
     /// Checks ranges and the energy bound; `origin` names the file in the message.
     pub fn validate(&self, origin: &str) -> Result<()> {
+        if self.lobes.len() > MAX_LOBES {
+            return Err(Error::input(
+                origin,
+                format!("lobes: {} lobes, more than the limit of {MAX_LOBES}", self.lobes.len()),
+            ));
+        }
         check_albedo(origin, "diffuse", self.diffuse)?;
         for (k, l) in self.lobes.iter().enumerate() {
             check_albedo(origin, &format!("lobes[{k}].albedo"), l.albedo)?;
@@ -172,12 +187,21 @@ impl Material {
         let f: MaterialFile = parse_json(text, origin)?;
         check_format(origin, &f.format, MATERIAL_FORMAT, f.version, MATERIAL_VERSION)?;
         let (normalization, symmetrize) = model_of(origin, &f)?;
+        if f.lobes.len() > MAX_LOBES {
+            return Err(Error::input(
+                origin,
+                format!("lobes: {} lobes, more than the limit of {MAX_LOBES}", f.lobes.len()),
+            ));
+        }
         let mut lobes = Vec::with_capacity(f.lobes.len());
         for (k, l) in f.lobes.into_iter().enumerate() {
             let [w, x, y, z] = l.rotation;
             let q = DQuat::from_xyzw(x, y, z, w);
+            // Scaled by its largest component first, so that a finite quaternion whose squared
+            // length overflows (components near 1e154 and above) still normalises.
+            let big = [w, x, y, z].iter().fold(0.0f64, |a, c| a.max(c.abs()));
             let len = q.length();
-            if !(len.is_finite() && len > 1e-12) {
+            if !(big.is_finite() && big > 0.0 && (q / big).length() * big > 1e-12) {
                 return Err(Error::input(
                     origin,
                     format!("lobes[{k}].rotation: a quaternion of length {len} cannot be normalised"),
@@ -185,7 +209,12 @@ impl Material {
             }
             // A quaternion that is already unit to rounding is kept as written, so files read back
             // bit for bit.
-            let rotation = if (len - 1.0).abs() < 1e-14 { q } else { q / len };
+            let rotation = if (len - 1.0).abs() < 1e-14 {
+                q
+            } else {
+                let s = q / big;
+                s / s.length()
+            };
             lobes.push(Lobe {
                 albedo: l.albedo,
                 alpha_x: l.alpha_x,
@@ -202,8 +231,8 @@ impl Material {
 
     /// Reads and validates a material file.
     pub fn load(path: &Path) -> Result<Material> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Material::from_json(&text, &path.display().to_string())
+        let text = crate::fsio::read_text_limited(path, MAX_JSON_BYTES, "a material file")?;
+        Material::from_json(&text, &crate::fsio::show(path))
     }
 
     /// The file's JSON text (pretty, full `f64` precision: it reads back bit for bit).

@@ -120,6 +120,12 @@ fn make_room(m: &mut Material, keep: Option<usize>, want: [f64; 3]) -> [f64; 3] 
 /// Create: a new sharp lobe whose highlight peaks exactly at `p` (SPEC §2, paper §3.3.1). Returns
 /// the new lobe's index.
 pub fn create(m: &Material, s: &Settings, p: (f64, f64)) -> Result<(Material, usize)> {
+    if m.lobes.len() >= crate::brdf::material::MAX_LOBES {
+        return Err(Error::Brush(format!(
+            "the material has {} lobes already, the most a material may have",
+            crate::brdf::material::MAX_LOBES
+        )));
+    }
     let site = lit_site(&s.canvas, p)?;
     // Near the mirror point the brush snaps to it, where R = I exactly.
     let snapped = s.canvas.mirror_point().is_some_and(|mp| (mp.0 - p.0).hypot(mp.1 - p.1) < s.snap_radius);

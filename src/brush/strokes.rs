@@ -114,8 +114,8 @@ impl Strokes {
     }
 
     pub fn load(path: &Path) -> Result<Strokes> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Strokes::from_json(&text, &path.display().to_string())
+        let text = crate::fsio::read_text_limited(path, crate::brdf::file::MAX_JSON_BYTES, "a strokes file")?;
+        Strokes::from_json(&text, &crate::fsio::show(path))
     }
 
     /// The brush settings this file asks for.

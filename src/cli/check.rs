@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use brdf_shop::brdf::energy::{AlbedoBound, Report, BOUND_ROUNDING, FACET_GRID};
+use brdf_shop::brdf::energy::{AlbedoBound, Report, Watch, BOUND_ROUNDING, FACET_GRID, MAX_PAIRS, MAX_SAMPLES};
 use brdf_shop::brdf::{Material, Normalization};
 
 use super::{NotPhysicallyCorrect, UsageError};
@@ -71,11 +71,26 @@ pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> St
 }
 
 pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow::Result<()> {
-    if samples < 2 || pairs < 1 {
-        return Err(UsageError("--samples must be ≥ 2 and --pairs ≥ 1".into()).into());
+    if !(2..=MAX_SAMPLES).contains(&samples) {
+        return Err(UsageError(format!("--samples: {samples} is not within 2 and the limit of {MAX_SAMPLES}")).into());
+    }
+    if !(1..=MAX_PAIRS).contains(&pairs) {
+        return Err(UsageError(format!("--pairs: {pairs} is not within 1 and the limit of {MAX_PAIRS}")).into());
     }
     let m = Material::load(material)?;
-    let r = Report::measure(&m, samples, pairs);
+    brdf_shop::interrupt::install();
+    // A progress bar on stderr (hidden when stderr is not a terminal); Ctrl-C stops the
+    // measurement before anything is printed.
+    let bar = indicatif::ProgressBar::new(Report::work(&m, samples, pairs));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("check {bar:40} {percent}%, {eta} left")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let advance = |n: u64| bar.inc(n);
+    let watch = Watch { advance: &advance, stop: &brdf_shop::interrupt::requested };
+    let r = Report::measure_watched(&m, samples, pairs, watch);
+    bar.finish_and_clear();
+    let r = r.ok_or(brdf_shop::interrupt::Interrupted)?;
     if json {
         let a = &r.max_albedo;
         let v = serde_json::json!({

@@ -12,6 +12,7 @@ use image::ImageEncoder;
 pub fn run(out: &Path) -> anyhow::Result<()> {
     let strokes = brdf_shop::brush::strokes::default_strokes()?;
     let m = strokes.replay(&Material::scratch(), "embedded default strokes")?;
+    brdf_shop::fsio::check_output_dir("--out", out)?;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the folder", out.display()))?;
     m.save(&out.join("material.brdf.json"))?;
 

@@ -12,13 +12,26 @@ fn renderer() -> anyhow::Result<Renderer> {
     Ok(Renderer::new(Context::from_env()?)?)
 }
 
+/// A report's result, or [`brdf_shop::interrupt::Interrupted`] (exit status 130) when it stopped on
+/// Ctrl-C.
+fn unless_interrupted<T>(r: brdf_shop::Result<T>) -> anyhow::Result<T> {
+    match r {
+        Err(_) if brdf_shop::interrupt::requested() => Err(brdf_shop::interrupt::Interrupted.into()),
+        r => Ok(r?),
+    }
+}
+
 pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(p) = json {
+        brdf_shop::fsio::check_output("--json", p)?;
+    }
     let mut plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     // Refused before the device starts: a missing map leaves nothing written.
     brdf_shop::measure::require_maps(&plan.hdri, &[bench::ENV])?;
     let mut r = renderer()?;
-    let rows = bench::run(&mut r, &plan, true)?;
+    brdf_shop::interrupt::install();
+    let rows = unless_interrupted(bench::run(&mut r, &plan, true))?;
     print!("{}", bench::table(&rows, r.device_name()));
     if let Some(path) = json {
         let text =
@@ -30,11 +43,13 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
 }
 
 pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Result<()> {
+    brdf_shop::fsio::check_output_dir("--out", out)?;
     let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
     let mut r = renderer()?;
-    let (rows, files) = error_vs_time::report(&mut r, &plan, out, true)?;
+    brdf_shop::interrupt::install();
+    let (rows, files) = unless_interrupted(error_vs_time::report(&mut r, &plan, out, true))?;
     print!("{}", error_vs_time::summary(&rows, &plan, r.device_name()));
     for f in files {
         println!("wrote {}", f.display());
@@ -43,6 +58,9 @@ pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Re
 }
 
 pub fn stability(quick: bool, out: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(p) = out {
+        brdf_shop::fsio::check_output("--out", p)?;
+    }
     let mut r = renderer()?;
     let cases = stability::run(&mut r, quick)?;
     let text = stability::table(&cases, r.device_name());

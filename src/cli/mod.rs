@@ -82,11 +82,11 @@ enum Command {
     Check {
         #[arg(long)]
         material: PathBuf,
-        /// Monte Carlo samples per view direction for the albedo.
-        #[arg(long, default_value_t = 20_000)]
+        /// Monte Carlo samples per view direction for the albedo (at most 1000000).
+        #[arg(long, default_value_t = 20_000, allow_hyphen_values = true)]
         samples: usize,
-        /// Direction pairs for the reciprocity error.
-        #[arg(long, default_value_t = 200_000)]
+        /// Direction pairs for the reciprocity error (at most 10000000).
+        #[arg(long, default_value_t = 200_000, allow_hyphen_values = true)]
         pairs: usize,
         /// Print the report as JSON.
         #[arg(long)]
@@ -124,8 +124,8 @@ enum Command {
         /// With --quit: first refine the mesh view to 1024 spp of the mis estimator.
         #[arg(long)]
         converge: bool,
-        /// Window size `WxH`.
-        #[arg(long, default_value = "1280x720")]
+        /// Window size `WxH` (each side at most 8192).
+        #[arg(long, default_value = "1280x720", allow_hyphen_values = true)]
         size: String,
     },
     /// Headless GPU render of the material on a mesh under an environment, or of the canvas.
@@ -198,11 +198,23 @@ pub fn parse() -> Result<Cli, ExitCode> {
                 let first = first.join(" ");
                 let first = first.trim_start_matches("error: ");
                 let first = if first.is_empty() { "bad command line" } else { first };
-                eprintln!("brdf-shop: {first} (see brdf-shop --help)");
+                eprintln!("brdf-shop: {} (see brdf-shop --help)", tidy_message(first));
                 ExitCode::from(1)
             }
         }
     })
+}
+
+/// The longest run of characters without a space a message keeps: values are quoted to
+/// [`brdf_shop::fsio::QUOTE_CHARS`] where they are refused, and this cuts what other layers echo
+/// (clap's `invalid value '…'`, serde's `unknown field "…"`) so that a 100 MB value still gives a
+/// short line. Long enough for any real path.
+const MAX_WORD_CHARS: usize = 240;
+
+/// One line for stderr: control characters escaped (line breaks included), each over-long word cut
+/// to [`MAX_WORD_CHARS`] with its length in bytes.
+pub fn tidy_message(msg: &str) -> String {
+    brdf_shop::fsio::shorten_words(&msg.replace('\n', " "), MAX_WORD_CHARS)
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {

@@ -22,12 +22,13 @@ pub fn run(strokes: &Path, material: Option<&Path>, out: &Path, model: Option<&s
         )
         .into());
     }
+    brdf_shop::fsio::check_output("--out", out)?;
     let s = Strokes::load(strokes)?;
     let start = match material {
         Some(p) => Material::load(p)?,
         None => scratch,
     };
-    let m = s.replay(&start, &strokes.display().to_string())?;
+    let m = s.replay(&start, &brdf_shop::fsio::show(strokes))?;
     m.save(out)?;
     eprintln!("wrote {} ({} lobes)", out.display(), m.lobes.len());
     Ok(())

@@ -11,25 +11,26 @@ use brdf_shop::render::View;
 use super::scene::{self, SceneArgs};
 
 pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
-    let scene = scene::load(args, |_| 1024)?;
+    let scene = scene::load(args, |_| 1024, reference::check_limits)?;
+    brdf_shop::interrupt::install();
     let s = &scene.settings;
     let start = Instant::now();
     let image = match s.view {
         View::Mesh => {
             let (env, mesh) =
                 (scene.env.as_ref().expect("loaded for mesh views"), scene.mesh.as_ref().expect("loaded"));
-            reference::render_mesh(&scene.material, env, mesh, &s.camera, s.width, s.height, s.spp, true)
+            let stop = brdf_shop::interrupt::requested;
+            reference::render_mesh_watched(&scene.material, env, mesh, &s.camera, s.width, s.height, s.spp, true, &stop)
+                .ok_or(brdf_shop::interrupt::Interrupted)?
         }
         View::Canvas => {
             let canvas = Canvas { light: s.light, intensity: s.intensity };
             reference::render_canvas(&scene.material, &canvas, s.width, s.height)
         }
     };
+    let mut image = image;
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    brdf_shop::imageio::write(&args.out, image.width, image.height, &image.pixels, args.exposure)?;
-    if let Some(path) = &args.timings {
-        scene::write_timings(path, "cpu (reference)", &scene, &[("reference".to_string(), ms)])?;
-    }
+    scene::write_outputs(args, &mut image, "cpu (reference)", &scene, &[("reference".to_string(), ms)])?;
     scene::report_env(&scene);
     eprintln!(
         "reference {}x{} at {} spp in {:.1} s; wrote {}",

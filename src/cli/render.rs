@@ -6,7 +6,7 @@ use brdf_shop::vk::Context;
 use super::scene::{self, SceneArgs};
 
 pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
-    let scene = scene::load(args, |e| if e == Estimator::Mis { 1024 } else { 8 })?;
+    let scene = scene::load(args, |e| if e == Estimator::Mis { 1024 } else { 8 }, brdf_shop::render::check_limits)?;
     let mut renderer = Renderer::new(Context::from_env()?)?;
     if let Some(env) = &scene.env {
         renderer.set_environment(env)?;
@@ -19,12 +19,9 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
             "warning: this device cannot filter RGBA32F linearly; the environment is read with nearest filtering"
         );
     }
-    let frame = renderer.render(&scene.material, &scene.settings)?;
-    brdf_shop::imageio::write(&args.out, frame.image.width, frame.image.height, &frame.image.pixels, args.exposure)?;
-    if let Some(path) = &args.timings {
-        let passes: Vec<(String, f64)> = frame.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
-        scene::write_timings(path, renderer.device_name(), &scene, &passes)?;
-    }
+    let mut frame = renderer.render(&scene.material, &scene.settings)?;
+    let passes: Vec<(String, f64)> = frame.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
+    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes)?;
     let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
     scene::report_env(&scene);
     eprintln!(

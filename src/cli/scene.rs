@@ -37,10 +37,10 @@ pub struct SceneArgs {
     #[arg(long, value_enum, default_value_t = ViewArg::Mesh)]
     pub view: ViewArg,
     /// Image size `WxH`.
-    #[arg(long, default_value = "512x512")]
+    #[arg(long, default_value = "512x512", allow_hyphen_values = true)]
     pub size: String,
     /// Samples per pixel per lobe (fis, plain) or per pixel (mis, reference).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub spp: Option<u32>,
     #[arg(long, value_enum)]
     pub estimator: Option<EstimatorArg>,
@@ -52,10 +52,10 @@ pub struct SceneArgs {
     pub camera: Option<String>,
     /// Canvas light direction `x,y,z` (canvas space); default: the environment's brightest direction
     /// seen from the camera, or the default strokes' light without an environment.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub light: Option<String>,
-    /// Linear scale before the sRGB curve (PNG output).
-    #[arg(long, default_value_t = 1.0)]
+    /// Linear scale before the sRGB curve (PNG output): a finite number > 0.
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub exposure: f64,
     /// Output image: .exr (linear) or .png.
     #[arg(long)]
@@ -74,7 +74,9 @@ pub struct Scene {
 }
 
 pub fn parse_size(s: &str) -> Result<(u32, u32), Error> {
-    let bad = || Error::input("--size", format!("expected WxH with positive integers, got \"{s}\""));
+    let bad = || {
+        Error::input("--size", format!("expected WxH with positive integers, got \"{}\"", brdf_shop::fsio::quote(s)))
+    };
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
     if w == 0 || h == 0 {
@@ -89,10 +91,14 @@ fn parse_vec3(flag: &str, s: &str) -> Result<DVec3, Error> {
     match v {
         Some(v) if v.len() == 3 => {
             let d = DVec3::new(v[0], v[1], v[2]);
-            brdf_shop::brdf::material::unit(d)
-                .ok_or_else(|| Error::input(flag, format!("\"{s}\" is not a usable direction (zero length)")))
+            brdf_shop::brdf::material::unit(d).ok_or_else(|| {
+                Error::input(flag, format!("\"{}\" is not a usable direction (zero length)", brdf_shop::fsio::quote(s)))
+            })
         }
-        _ => Err(Error::input(flag, format!("expected x,y,z with three finite numbers, got \"{s}\""))),
+        _ => Err(Error::input(
+            flag,
+            format!("expected x,y,z with three finite numbers, got \"{}\"", brdf_shop::fsio::quote(s)),
+        )),
     }
 }
 
@@ -113,9 +119,31 @@ fn canvas_light(args: &SceneArgs, env: Option<&Environment>, camera: &Camera) ->
     Ok(strokes.settings("embedded default strokes")?.canvas.light)
 }
 
-/// Loads and checks everything; `default_spp` per estimator when `--spp` is absent.
-pub fn load(args: &SceneArgs, default_spp: impl Fn(Estimator) -> u32) -> anyhow::Result<Scene> {
+/// Checks the output paths before any work: `--out` (an image format, a writable folder) and
+/// `--timings` (a writable folder, not the same file as `--out`).
+pub fn check_outputs(args: &SceneArgs) -> anyhow::Result<()> {
     brdf_shop::imageio::check_output_path(&args.out)?;
+    brdf_shop::fsio::check_output("--out", &args.out)?;
+    if let Some(t) = &args.timings {
+        brdf_shop::fsio::check_output("--timings", t)?;
+        if t == &args.out {
+            return Err(Error::input("--timings", "names the same file as --out").into());
+        }
+    }
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        return Err(Error::input("--exposure", format!("must be a finite number > 0, got {}", args.exposure)).into());
+    }
+    Ok(())
+}
+
+/// Loads and checks everything; `default_spp` per estimator when `--spp` is absent; `limits`
+/// refuses a size or sample count beyond the command's limits (before anything is loaded).
+pub fn load(
+    args: &SceneArgs,
+    default_spp: impl Fn(Estimator) -> u32,
+    limits: impl Fn(u32, u32, u32) -> Result<(), Error>,
+) -> anyhow::Result<Scene> {
+    check_outputs(args)?;
     let (width, height) = parse_size(&args.size)?;
     let estimator = match (args.estimator, args.no_prefilter) {
         (None, false) | (Some(EstimatorArg::Fis), false) => Estimator::Fis,
@@ -130,9 +158,7 @@ pub fn load(args: &SceneArgs, default_spp: impl Fn(Estimator) -> u32) -> anyhow:
         }
     };
     let spp = args.spp.unwrap_or_else(|| default_spp(estimator));
-    if spp == 0 {
-        return Err(Error::input("--spp", "must be at least 1").into());
-    }
+    limits(width, height, spp)?;
     let camera = match &args.camera {
         Some(c) => Camera::parse(c).map_err(|e| Error::input("--camera", e))?,
         None => Camera::default(),
@@ -183,8 +209,34 @@ pub fn report_env(scene: &Scene) {
     }
 }
 
-/// Writes the `--timings` JSON: device, estimator, size, samples, and per pass its name and GPU ms.
-pub fn write_timings(path: &Path, device: &str, scene: &Scene, passes: &[(String, f64)]) -> anyhow::Result<()> {
+/// Writes the image and, with `--timings`, the timings JSON as one atomic step (both temporary files
+/// are written before either is renamed), after warning about radiance clamped to `f32`'s range.
+pub fn write_outputs(
+    args: &SceneArgs,
+    image: &mut brdf_shop::reference::Image,
+    device: &str,
+    scene: &Scene,
+    passes: &[(String, f64)],
+) -> anyhow::Result<()> {
+    let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
+    let bytes = brdf_shop::imageio::encode(&args.out, image.width, image.height, &image.pixels, args.exposure)?;
+    let timings = args.timings.as_ref().map(|t| timings_json(device, scene, passes).map(|j| (t, j))).transpose()?;
+    let mut outputs: Vec<(&Path, &[u8])> = vec![(&args.out, &bytes)];
+    if let Some((t, j)) = &timings {
+        outputs.push((t.as_path(), j.as_bytes()));
+    }
+    brdf_shop::fsio::write_all_atomic(&outputs)?;
+    if clamped > 0 {
+        eprintln!(
+            "warning: {clamped} channel value(s) overflowed f32 (or were NaN) and were written as ±{:e} (NaN as 0)",
+            f32::MAX
+        );
+    }
+    Ok(())
+}
+
+/// The `--timings` JSON: device, estimator, size, samples, and per pass its name and GPU ms.
+fn timings_json(device: &str, scene: &Scene, passes: &[(String, f64)]) -> anyhow::Result<String> {
     let s = &scene.settings;
     let json = serde_json::json!({
         "device": device,
@@ -195,7 +247,5 @@ pub fn write_timings(path: &Path, device: &str, scene: &Scene, passes: &[(String
         "passes": passes.iter().map(|(n, ms)| serde_json::json!({"name": n, "ms": ms})).collect::<Vec<_>>(),
         "total_ms": passes.iter().map(|p| p.1).sum::<f64>(),
     });
-    let text = serde_json::to_string_pretty(&json).context("encoding timings")? + "\n";
-    brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
-    Ok(())
+    Ok(serde_json::to_string_pretty(&json).context("encoding timings")? + "\n")
 }

@@ -60,6 +60,23 @@ pub struct Options {
     pub size: (u32, u32),
 }
 
+/// The longest side of the editor's window (pixels), checked before a window is made: an 8K
+/// display is 7680 wide, X11 cannot make a window of 65536 (winit panics on it), and the frame is
+/// composed on the CPU at 4 bytes a pixel plus the GPU's targets, so 8192² stays near 1.5 GB.
+pub const MAX_WINDOW_SIDE: u32 = 8192;
+
+/// Refuses (naming `--size`) a window size of a zero side or a side over [`MAX_WINDOW_SIDE`].
+pub fn check_size(size: (u32, u32)) -> Result<()> {
+    let (w, h) = size;
+    if w == 0 || h == 0 || w > MAX_WINDOW_SIDE || h > MAX_WINDOW_SIDE {
+        return Err(Error::input(
+            "--size",
+            format!("{w}x{h}: each side of the window must be within 1 and {MAX_WINDOW_SIDE} pixels"),
+        ));
+    }
+    Ok(())
+}
+
 /// Where unsaved work goes: `BRDF_SHOP_RECOVERY`, else `$XDG_STATE_HOME/brdf-shop/recovery.brdf.json`,
 /// else `~/.local/state/brdf-shop/recovery.brdf.json`.
 pub fn recovery_path() -> PathBuf {
@@ -78,6 +95,20 @@ pub fn save_recovery(m: &Material, path: &Path) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     m.save(path)
+}
+
+/// [`save_recovery`] that never ends the session: a recovery file that cannot be written is a
+/// warning on stderr (once per session, `warned`) and, returned, a status line for the window; the
+/// work goes on and `--out` is still written at the end.
+fn keep_recovery(m: &Material, warned: &mut bool) -> Option<String> {
+    let path = recovery_path();
+    let e = save_recovery(m, &path).err()?;
+    let msg = format!("unsaved work is NOT protected: the recovery file cannot be written ({e})");
+    if !*warned {
+        eprintln!("brdf-shop: warning: {}", crate::fsio::escape_controls(&msg));
+        *warned = true;
+    }
+    Some(format!("warning: {msg}"))
 }
 
 struct Gpu {
@@ -160,6 +191,8 @@ struct App {
     last_kind: FrameKind,
     /// The recovery file's material, offered until restored (R) or replaced by an edit.
     recovered: Option<Material>,
+    /// Whether the warning that the recovery file cannot be written was printed.
+    recovery_warned: bool,
     egui_ctx: egui::Context,
     egui_state: Option<egui_winit::State>,
     spp: u32,
@@ -273,7 +306,9 @@ impl App {
         let Some(state) = self.state.as_mut() else { return Ok(()) };
         let fx = state.handle(input);
         if fx.material_changed {
-            save_recovery(state.material(), &recovery_path())?;
+            if let Some(status) = keep_recovery(state.material(), &mut self.recovery_warned) {
+                state.status = status;
+            }
         }
         if fx.save {
             let path = self
@@ -600,7 +635,9 @@ impl App {
                 state.history.push(m);
             }
             self.panel_dragging = dragging;
-            save_recovery(state.material(), &recovery_path())?;
+            if let Some(status) = keep_recovery(state.material(), &mut self.recovery_warned) {
+                state.status = status;
+            }
             if let Some(g) = &self.gpu {
                 g.window.request_redraw();
             }
@@ -949,6 +986,12 @@ impl ApplicationHandler for App {
 
 /// Runs the editor until the window closes (or, with `quit`, until the replay is done).
 pub fn run(opts: Options) -> Result<()> {
+    check_size(opts.size)?;
+    for (flag, path) in [("--out", &opts.out), ("--screenshot", &opts.screenshot)] {
+        if let Some(p) = path {
+            crate::fsio::check_output(flag, p)?;
+        }
+    }
     let env = match &opts.env {
         Some(p) => Environment::load(p)?,
         None => crate::measure::embedded_environment()?,
@@ -1000,6 +1043,7 @@ pub fn run(opts: Options) -> Result<()> {
         frame_stats: Vec::new(),
         last_kind: FrameKind::Unchanged,
         recovered,
+        recovery_warned: false,
         egui_ctx: egui::Context::default(),
         egui_state: None,
         spp: 8,

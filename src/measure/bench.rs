@@ -141,10 +141,15 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     let mut out = Vec::new();
     let total = plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2;
     let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
+    // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
     let tick = || {
         if let Some(b) = &bar {
             b.inc(1);
         }
+        if crate::interrupt::requested() {
+            return Err(crate::Error::input("bench", "interrupted"));
+        }
+        Ok(())
     };
     let mut push = |group, label: String, triangles, (passes, total)| {
         out.push(Measurement { group, label, triangles, passes, total });
@@ -157,7 +162,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             sphere.triangle_count(),
             measure(r, &material(n), &settings(plan.size, 8), plan.repeats)?,
         );
-        tick();
+        tick()?;
     }
     for &size in &plan.sizes {
         push(
@@ -166,7 +171,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             sphere.triangle_count(),
             measure(r, &four, &settings(size, 8), plan.repeats)?,
         );
-        tick();
+        tick()?;
     }
     for &spp in &plan.spps {
         push(
@@ -175,14 +180,14 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             sphere.triangle_count(),
             measure(r, &four, &settings(plan.size, spp), plan.repeats)?,
         );
-        tick();
+        tick()?;
     }
     for vec4 in [true, false] {
         r.scalar_lobes = !vec4;
         let m = measure(r, &four, &settings(plan.size, 8), plan.repeats);
         r.scalar_lobes = false;
         push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
-        tick();
+        tick()?;
     }
     for &(seg, rings) in &plan.tessellations {
         let mesh = Mesh::uv_sphere(seg, rings);
@@ -193,7 +198,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             mesh.triangle_count(),
             measure(r, &four, &settings(plan.size, 8), plan.repeats)?,
         );
-        tick();
+        tick()?;
     }
     r.set_mesh(&sphere)?;
     if let Some(b) = bar {

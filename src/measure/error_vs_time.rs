@@ -194,6 +194,10 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
             let reference = cached_reference(&cache, m, &env, &mesh, &camera, plan.size, plan.reference_spp)?;
             for estimator in [Estimator::Fis, Estimator::Plain, Estimator::Mis] {
                 for &spp in &plan.spps {
+                    // Ctrl-C (the CLI installs the handler): stop before the next measurement.
+                    if crate::interrupt::requested() {
+                        return Err(Error::input("error-vs-time", "interrupted"));
+                    }
                     let s = Settings {
                         width: plan.size,
                         height: plan.size,
@@ -353,8 +357,8 @@ pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) 
     let rows = run(renderer, plan, out, progress)?;
     let device = renderer.device_name().to_string();
     let files = vec![out.join("error-vs-time.csv"), out.join("error-vs-time.png"), out.join("error-vs-time.md")];
-    write_atomic(&files[0], csv(&rows).as_bytes())?;
-    write_atomic(&files[1], &plot(&rows, &device)?)?;
-    write_atomic(&files[2], summary(&rows, plan, &device).as_bytes())?;
+    // All three as one step: every temporary file is written before the first rename.
+    let (csv, png, md) = (csv(&rows), plot(&rows, &device)?, summary(&rows, plan, &device));
+    crate::fsio::write_all_atomic(&[(&files[0], csv.as_bytes()), (&files[1], &png), (&files[2], md.as_bytes())])?;
     Ok((rows, files))
 }

@@ -18,6 +18,38 @@ use crate::rng::{radical_inverse, Pcg32};
 use crate::scene::camera::{Rays, NEAR};
 use crate::scene::{Camera, Environment, Mesh};
 
+/// The memory budget of a reference image, in pixels: 4096×4096. The reference keeps per pixel a
+/// hit record (64 bytes), the band buffers while casting (up to 72), the rows and the image (16
+/// each), about 170 bytes at the peak, so the largest image stays under 3 GB.
+pub const MAX_PIXELS: u64 = 4096 * 4096;
+
+/// The most samples per pixel of a reference: the same number as the GPU's limit (`render::MAX_SPP`,
+/// not imported: this module knows nothing of the GPU), so the quasi-random table (40 bytes a
+/// sample) stays at 2.6 MB; at 1024 spp a 512² reference takes minutes on two cores already.
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// Refuses (naming the flag) a reference image beyond [`MAX_PIXELS`] or [`MAX_SPP`], before
+/// anything is allocated.
+pub fn check_limits(width: u32, height: u32, spp: u32) -> crate::Result<()> {
+    use crate::Error;
+    if width == 0 || height == 0 {
+        return Err(Error::input("--size", format!("{width}x{height} is empty; both sides must be at least 1")));
+    }
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(Error::input(
+            "--size",
+            format!("{width}x{height} is more than the limit of {MAX_PIXELS} pixels (4096x4096) for a reference"),
+        ));
+    }
+    if spp == 0 {
+        return Err(Error::input("--spp", "must be at least 1"));
+    }
+    if spp > MAX_SPP {
+        return Err(Error::input("--spp", format!("{spp} is more than the limit of {MAX_SPP} samples per pixel")));
+    }
+    Ok(())
+}
+
 /// A linear RGBA image, row-major from the top; alpha 1 on the object, 0 on the background.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -183,6 +215,22 @@ pub fn render_mesh(
     spp: u32,
     progress: bool,
 ) -> Image {
+    render_mesh_watched(material, env, mesh, camera, width, height, spp, progress, &|| false).expect("never stopped")
+}
+
+/// [`render_mesh`], polling `stop` before each row: `None` as soon as it returns true.
+#[allow(clippy::too_many_arguments)]
+pub fn render_mesh_watched(
+    material: &Material,
+    env: &Environment,
+    mesh: &Mesh,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    spp: u32,
+    progress: bool,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Image> {
     let hits = rasterize(mesh, camera, width, height);
     let dist = env.distribution();
     let seq = sequence(spp.max(1));
@@ -196,34 +244,41 @@ pub fn render_mesh(
         );
         b
     });
-    let rows: Vec<Vec<[f32; 4]>> = (0..height as usize)
+    let rows: Option<Vec<Vec<[f32; 4]>>> = (0..height as usize)
         .into_par_iter()
         .map(|j| {
+            if stop() {
+                return None;
+            }
             let row = (0..w)
                 .map(|i| {
+                    // Polled per pixel: a pixel of the largest sample count takes well under a second.
+                    if stop() {
+                        return None;
+                    }
                     let pixel = j * w + i;
                     match hits.hits[pixel] {
                         None => {
                             let l = env.lookup(rays.at(i as f64 + 0.5, j as f64 + 0.5));
-                            [l.x as f32, l.y as f32, l.z as f32, 0.0]
+                            Some([l.x as f32, l.y as f32, l.z as f32, 0.0])
                         }
                         Some(hit) => {
                             let l = shade(material, env, &dist, &seq, camera.eye, hit, pixel as u64);
-                            [l.x as f32, l.y as f32, l.z as f32, 1.0]
+                            Some([l.x as f32, l.y as f32, l.z as f32, 1.0])
                         }
                     }
                 })
-                .collect();
+                .collect::<Option<Vec<_>>>()?;
             if let Some(b) = &bar {
                 b.inc(1);
             }
-            row
+            Some(row)
         })
         .collect();
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    Image { width, height, pixels: rows.concat() }
+    Some(Image { width, height, pixels: rows?.concat() })
 }
 
 fn shade(

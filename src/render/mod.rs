@@ -73,6 +73,39 @@ pub enum View {
     Canvas,
 }
 
+/// The most samples per pixel (per lobe for `fis`/`plain`, per pixel for `mis`) a frame takes. The
+/// sample tables are uploaded whole (16 bytes a sample for the lobe passes, 32 for `mis`, rounded
+/// up to a power of two) and `mis` records one dispatch per 32 samples: 65536 keeps the table at
+/// 2 MiB and a frame at 2048 dispatches, 16× the 4096 spp at which `mis` is converged to 1 %
+/// (README).
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// The most pixels a GPU frame has: 8192×4096 (twice 8K UHD). Every pixel costs 48 bytes of render
+/// targets, 16 of readback buffer and 16 of host image, so the largest frame needs about 2.7 GB
+/// (a frame of the device's largest image, 16384², would need 21 GB).
+pub const MAX_PIXELS: u64 = 8192 * 4096;
+
+/// Refuses (naming the flag) an image size or sample count beyond the limits, before anything is
+/// allocated: the sizes of [`Renderer::render`] and of `render`'s flags.
+pub fn check_limits(width: u32, height: u32, spp: u32) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::input("--size", format!("{width}x{height} is empty; both sides must be at least 1")));
+    }
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(Error::input(
+            "--size",
+            format!("{width}x{height} is more than the limit of {MAX_PIXELS} pixels (8192x4096) for a GPU frame"),
+        ));
+    }
+    if spp == 0 {
+        return Err(Error::input("--spp", "must be at least 1"));
+    }
+    if spp > MAX_SPP {
+        return Err(Error::input("--spp", format!("{spp} is more than the limit of {MAX_SPP} samples per pixel")));
+    }
+    Ok(())
+}
+
 /// What one frame renders.
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -257,17 +290,19 @@ impl Renderer {
 
     fn check_size(&self, s: &Settings) -> Result<()> {
         let limit = self.ctx.device.limits.max_image_dimension2_d;
-        if s.width == 0 || s.height == 0 {
-            return Err(Error::input("--size", format!("{}x{} is empty", s.width, s.height)));
-        }
+        check_limits(s.width, s.height, s.spp)?;
         if s.width > limit || s.height > limit {
             return Err(Error::input(
                 "--size",
                 format!("{}x{} exceeds the device's largest image ({limit}x{limit})", s.width, s.height),
             ));
         }
-        if s.spp == 0 {
-            return Err(Error::input("--spp", "must be at least 1"));
+        // The editor's refinement adds frames of samples; their sum stays within the table's limit.
+        if self.mis_offset.saturating_add(s.spp) > MAX_SPP {
+            return Err(Error::input(
+                "--spp",
+                format!("{} samples after {} is more than the limit of {MAX_SPP}", s.spp, self.mis_offset),
+            ));
         }
         Ok(())
     }

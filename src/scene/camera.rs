@@ -33,6 +33,16 @@ impl Default for Camera {
 /// the unit sphere.
 pub const NEAR: f64 = 0.01;
 
+/// The largest `|coordinate|` of `eye` and `target`. Meshes are scaled to the unit sphere and the
+/// GPU works in `f32`, whose spacing at 1e6 is 0.06: a camera further out sees the object as a
+/// sub-pixel dot and its rays lose the precision to hit it, so such a camera is refused rather than
+/// overflowing (`target − eye` of 1e300 and −1e300 is infinite).
+pub const MAX_COORD: f64 = 1.0e6;
+
+/// The smallest field of view (degrees): narrower, a pixel spans less than `f32` can tell apart
+/// at the default distance (and `1/tan(fov/2)` heads for `f32`'s overflow).
+pub const MIN_FOV_DEG: f64 = 1.0e-3;
+
 /// Sine of the smallest angle allowed between `up` and the view direction.
 const MIN_UP_SINE: f64 = 1e-6;
 
@@ -40,7 +50,7 @@ fn parse_vec(key: &str, v: &str) -> Result<DVec3, String> {
     let nums: Option<Vec<f64>> = v.split(',').map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
     match nums {
         Some(n) if n.len() == 3 => Ok(DVec3::new(n[0], n[1], n[2])),
-        _ => Err(format!("{key}: expected three finite numbers x,y,z, got \"{v}\"")),
+        _ => Err(format!("{key}: expected three finite numbers x,y,z, got \"{}\"", crate::fsio::quote(v))),
     }
 }
 
@@ -53,24 +63,23 @@ impl Camera {
         let mut c = Camera::default();
         let mut seen: Vec<&str> = Vec::new();
         for item in s.split_whitespace() {
-            let (key, value) =
-                item.split_once('=').ok_or_else(|| format!("\"{item}\" is not key=value (eye, target, up, fov)"))?;
+            let (key, value) = item
+                .split_once('=')
+                .ok_or_else(|| format!("\"{}\" is not key=value (eye, target, up, fov)", crate::fsio::quote(item)))?;
             if seen.contains(&key) {
-                return Err(format!("{key}: given twice"));
+                return Err(format!("{}: given twice", crate::fsio::quote(key)));
             }
             match key {
                 "eye" => c.eye = parse_vec(key, value)?,
                 "target" => c.target = parse_vec(key, value)?,
                 "up" => c.up = parse_vec(key, value)?,
                 "fov" => {
-                    c.fov_deg = value
-                        .trim()
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|f| f.is_finite())
-                        .ok_or_else(|| format!("fov: \"{value}\" is not a number of degrees"))?
+                    c.fov_deg =
+                        value.trim().parse::<f64>().ok().filter(|f| f.is_finite()).ok_or_else(|| {
+                            format!("fov: \"{}\" is not a number of degrees", crate::fsio::quote(value))
+                        })?
                 }
-                _ => return Err(format!("unknown key \"{key}\" (eye, target, up, fov)")),
+                _ => return Err(format!("unknown key \"{}\" (eye, target, up, fov)", crate::fsio::quote(key))),
             }
             seen.push(key);
         }
@@ -87,10 +96,15 @@ impl Camera {
                 return Err(format!("{key}: {v} is not finite"));
             }
         }
+        for (key, v) in [("eye", self.eye), ("target", self.target)] {
+            if v.abs().max_element() > MAX_COORD {
+                return Err(format!("{key}: {v} lies beyond ±{MAX_COORD:e}, the largest coordinate allowed"));
+            }
+        }
         let Some(f) = (self.target - self.eye).try_normalize() else {
             return Err(format!("eye and target are the same point {}", self.eye));
         };
-        match self.up.try_normalize() {
+        match crate::brdf::material::unit(self.up) {
             None => return Err("up: must not be zero".into()),
             Some(u) if !(f.cross(u).length() > MIN_UP_SINE) => {
                 return Err(format!("up: {} is parallel to the view direction {f}", self.up))
@@ -100,6 +114,9 @@ impl Camera {
         if !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
             return Err(format!("fov: {} is not between 0 and 180 degrees", self.fov_deg));
         }
+        if self.fov_deg < MIN_FOV_DEG {
+            return Err(format!("fov: {} is below {MIN_FOV_DEG} degrees, the smallest allowed", self.fov_deg));
+        }
         Ok(())
     }
 
@@ -107,7 +124,8 @@ impl Camera {
     /// made orthogonal to the view direction.
     pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let forward = (self.target - self.eye).normalize();
-        let right = forward.cross(self.up).normalize();
+        let up = crate::brdf::material::unit(self.up).unwrap_or(self.up);
+        let right = forward.cross(up).normalize();
         (right, right.cross(forward), forward)
     }
 

@@ -12,6 +12,36 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 
+/// The longest side of an environment map (texels): the side of the largest 2D image a desktop
+/// GPU accepts (`maxImageDimension2D` is 16384 on lavapipe and most discrete GPUs).
+pub const MAX_ENV_SIDE: usize = 16384;
+
+/// The most texels an environment map may have, checked against the file's header before any
+/// pixel is read or allocated: 8192×4096, the largest map the stability report uses. Loading and
+/// preparing a map (texels, mip chain, sampling tables in `f64`) takes about 80 bytes per texel,
+/// so the largest map needs about 2.7 GB.
+pub const MAX_ENV_TEXELS: usize = 8192 * 4096;
+
+/// The largest environment file read (bytes): an uncompressed 8192×4096 RGBA `f32` EXR is 512 MiB.
+pub const MAX_ENV_FILE_BYTES: u64 = 1 << 30;
+
+/// Refuses (naming `origin`) a declared size beyond [`MAX_ENV_SIDE`] or [`MAX_ENV_TEXELS`].
+fn check_declared_size(origin: &str, width: usize, height: usize) -> Result<()> {
+    if width > MAX_ENV_SIDE || height > MAX_ENV_SIDE {
+        return Err(Error::input(
+            origin,
+            format!("the header declares {width}x{height}, longer than the limit of {MAX_ENV_SIDE} texels a side"),
+        ));
+    }
+    if width.saturating_mul(height) > MAX_ENV_TEXELS {
+        return Err(Error::input(
+            origin,
+            format!("the header declares {width}x{height}, more than the limit of {MAX_ENV_TEXELS} texels (8192x4096)"),
+        ));
+    }
+    Ok(())
+}
+
 /// What the loader changed or kept.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EnvStats {
@@ -73,12 +103,12 @@ fn row_sin(j: usize, h: usize) -> f64 {
 impl Environment {
     /// Loads `.exr` or `.hdr` (by extension).
     pub fn load(path: &Path) -> Result<Environment> {
-        let origin = path.display().to_string();
+        let origin = crate::fsio::show(path);
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         if !matches!(ext.as_deref(), Some("exr") | Some("hdr")) {
             return Err(Error::input(origin, "an environment map must be .exr or .hdr"));
         }
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::fsio::read_limited(path, MAX_ENV_FILE_BYTES, "an environment map")?;
         let (w, h, texels) =
             if ext.as_deref() == Some("exr") { read_exr(&bytes, &origin)? } else { read_hdr(&bytes, &origin)? };
         Environment::from_texels(w, h, texels, &origin)
@@ -423,6 +453,13 @@ type Texels = (usize, usize, Vec<[f32; 3]>);
 
 fn read_exr(bytes: &[u8], origin: &str) -> Result<Texels> {
     use exr::prelude::*;
+    // The headers first: a declared size beyond the limits is refused before the reader allocates
+    // anything for it.
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| crate::error::Error::input(origin, format!("not a readable EXR file: {e}")))?;
+    for h in meta.headers.iter() {
+        check_declared_size(origin, h.layer_size.width(), h.layer_size.height())?;
+    }
     struct Px {
         w: usize,
         data: Vec<[f32; 3]>,
@@ -449,9 +486,12 @@ fn read_exr(bytes: &[u8], origin: &str) -> Result<Texels> {
 }
 
 fn read_hdr(bytes: &[u8], origin: &str) -> Result<Texels> {
-    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Hdr)
-        .map_err(|e| Error::input(origin, format!("not a readable Radiance HDR file: {e}")))?
-        .into_rgb32f();
+    use image::ImageDecoder as _;
+    let bad = |e: image::ImageError| Error::input(origin, format!("not a readable Radiance HDR file: {e}"));
+    let decoder = image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes)).map_err(bad)?;
+    let (w, h) = decoder.dimensions();
+    check_declared_size(origin, w as usize, h as usize)?;
+    let img = image::DynamicImage::from_decoder(decoder).map_err(bad)?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     Ok((w, h, img.pixels().map(|p| p.0).collect()))
 }

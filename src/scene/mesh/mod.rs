@@ -17,6 +17,11 @@ use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
 
+/// The largest mesh file (and glTF buffer file) read, in bytes, checked before it is read: a
+/// million-triangle OBJ is about 60 MB, and loading takes roughly ten times the file's size in
+/// memory at worst (OBJ text → positions, indices, normals), so 256 MiB keeps a load within a few GB.
+pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
+
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub name: String,

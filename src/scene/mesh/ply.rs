@@ -243,8 +243,8 @@ impl Mesh {
     /// not have, and a file without triangles. Normals come from `nx ny nz` when present, else as
     /// for every format ([`Mesh::from_triangles`]).
     pub fn load_ply(path: &Path) -> Result<Mesh> {
-        let origin = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let origin = crate::fsio::show(path);
+        let bytes = crate::fsio::read_limited(path, super::MAX_MESH_FILE_BYTES, "a mesh file")?;
         let (positions, normals, indices) = read_ply(&bytes).map_err(|m| Error::input(&origin, m))?;
         Mesh::from_triangles(&origin, file_name(path), positions, normals, indices)
     }
