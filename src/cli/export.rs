@@ -9,6 +9,7 @@ use brdf_shop::export::{self, Format};
 
 pub fn run(material: &Path, format: &str, out: &Path) -> anyhow::Result<()> {
     let format = Format::parse(format)?;
+    brdf_shop::fsio::check_output("--out", out)?;
     let m = Material::load(material)?;
     export::write(&m, format, out)?;
     eprintln!("brdf-shop: wrote {} ({})", out.display(), format.name());

@@ -49,18 +49,12 @@ impl Format {
     pub fn parse(text: &str) -> Result<Format> {
         Format::ALL.into_iter().find(|f| f.name() == text).ok_or_else(|| {
             let known: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
-            Error::input("--format", format!("unknown format {} (known: {})", quote(text), known.join(", ")))
+            Error::input(
+                "--format",
+                format!("unknown format \"{}\" (known: {})", crate::fsio::quote(text), known.join(", ")),
+            )
         })
     }
-}
-
-/// A user's value in a message: at most 80 characters, control characters escaped.
-pub fn quote(text: &str) -> String {
-    let mut s: String = text.chars().take(80).flat_map(char::escape_debug).collect();
-    if text.chars().count() > 80 {
-        s.push('…');
-    }
-    format!("\"{s}\"")
 }
 
 /// The exported text of `material` in `format`; a material the format cannot express is refused.
@@ -75,9 +69,7 @@ pub fn text(material: &Material, format: Format) -> Result<String> {
 /// Writes `material` in `format` to `out` atomically (temp file + rename): on any failure `out` is
 /// left as it was.
 pub fn write(material: &Material, format: Format, out: &Path) -> Result<()> {
-    if out.is_dir() {
-        return Err(Error::input(out.display().to_string(), "is a folder, not a file name"));
-    }
+    crate::fsio::check_output("--out", out)?;
     let text = text(material, format)?;
     crate::fsio::write_atomic(out, text.as_bytes())
 }
