@@ -333,3 +333,29 @@ fn dropped_files_that_do_not_load_do_not_end_the_session() {
     let out = Material::load(&d("out.brdf.json")).unwrap();
     assert!(same_material(&out, &Material::load(&good).unwrap()), "{out:?}");
 }
+
+/// A window larger than the display is clamped to it with a message (an Xvfb screen of 640×480,
+/// 2000×1500 asked): the session runs and the screenshot is the clamped window.
+#[test]
+fn a_window_larger_than_the_display_is_clamped() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let shot = dir.path().join("shot.png");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--replay"])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.strokes.json"))
+        .arg("--screenshot")
+        .arg(&shot)
+        .args(["--quit", "--size", "2000x1500"])
+        .env("BRDF_SHOP_RECOVERY", dir.path().join("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.contains("--size 2000x1500 is larger than the display (640x480): the window is 640x480"),
+        "{stderr}"
+    );
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert!(img.width() <= 640 && img.height() <= 480, "{:?}", img.dimensions());
+}

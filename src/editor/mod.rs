@@ -65,6 +65,11 @@ pub struct Options {
 /// composed on the CPU at 4 bytes a pixel plus the GPU's targets, so 8192² stays near 1.5 GB.
 pub const MAX_WINDOW_SIDE: u32 = 8192;
 
+/// Each side of a requested window size, limited to the display's.
+pub fn clamp_to_display(size: (u32, u32), display: (u32, u32)) -> (u32, u32) {
+    (size.0.min(display.0).max(1), size.1.min(display.1).max(1))
+}
+
 /// Refuses (naming `--size`) a window size of a zero side or a side over [`MAX_WINDOW_SIDE`].
 pub fn check_size(size: (u32, u32)) -> Result<()> {
     let (w, h) = size;
@@ -228,6 +233,20 @@ impl App {
     }
 
     fn init(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        // A window larger than the display is clamped to it, with a message (checked against
+        // MAX_WINDOW_SIDE before the loop started).
+        if let Some(m) = el.primary_monitor().or_else(|| el.available_monitors().next()) {
+            let (mw, mh) = (m.size().width, m.size().height);
+            let (w, h) = self.opts.size;
+            if mw > 0 && mh > 0 && (w > mw || h > mh) {
+                let fit = clamp_to_display((w, h), (mw, mh));
+                eprintln!(
+                    "brdf-shop: --size {w}x{h} is larger than the display ({mw}x{mh}): the window is {}x{}",
+                    fit.0, fit.1
+                );
+                self.opts.size = fit;
+            }
+        }
         let attrs = Window::default_attributes()
             .with_title("brdf-shop")
             .with_inner_size(winit::dpi::PhysicalSize::new(self.opts.size.0, self.opts.size.1));
