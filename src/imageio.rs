@@ -94,3 +94,31 @@ pub fn write_rgba8_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Res
         .map_err(|e| Error::input(path.display().to_string(), format!("cannot encode PNG: {e}")))?;
     write_atomic(path, &png)
 }
+
+/// Refuses (naming `--size` or `--spp`) an image of an empty side or more than `max_pixels`
+/// pixels (`shape`, e.g. "4096x4096", and `what` say which limit in the message), or a sample count
+/// of 0 or over `max_spp` — before anything is allocated. `render` and `reference` each call it
+/// with their own limits.
+pub fn check_image_limits(
+    (width, height, spp): (u32, u32, u32),
+    (max_pixels, max_spp): (u64, u32),
+    shape: &str,
+    what: &str,
+) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(Error::input("--size", format!("{width}x{height} is empty; both sides must be at least 1")));
+    }
+    if width as u64 * height as u64 > max_pixels {
+        return Err(Error::input(
+            "--size",
+            format!("{width}x{height} is more than the limit of {max_pixels} pixels ({shape}) for {what}"),
+        ));
+    }
+    if spp == 0 {
+        return Err(Error::input("--spp", "must be at least 1"));
+    }
+    if spp > max_spp {
+        return Err(Error::input("--spp", format!("{spp} is more than the limit of {max_spp} samples per pixel")));
+    }
+    Ok(())
+}

@@ -31,23 +31,7 @@ pub const MAX_SPP: u32 = 1 << 16;
 /// Refuses (naming the flag) a reference image beyond [`MAX_PIXELS`] or [`MAX_SPP`], before
 /// anything is allocated.
 pub fn check_limits(width: u32, height: u32, spp: u32) -> crate::Result<()> {
-    use crate::Error;
-    if width == 0 || height == 0 {
-        return Err(Error::input("--size", format!("{width}x{height} is empty; both sides must be at least 1")));
-    }
-    if width as u64 * height as u64 > MAX_PIXELS {
-        return Err(Error::input(
-            "--size",
-            format!("{width}x{height} is more than the limit of {MAX_PIXELS} pixels (4096x4096) for a reference"),
-        ));
-    }
-    if spp == 0 {
-        return Err(Error::input("--spp", "must be at least 1"));
-    }
-    if spp > MAX_SPP {
-        return Err(Error::input("--spp", format!("{spp} is more than the limit of {MAX_SPP} samples per pixel")));
-    }
-    Ok(())
+    crate::imageio::check_image_limits((width, height, spp), (MAX_PIXELS, MAX_SPP), "4096x4096", "a reference")
 }
 
 /// A linear RGBA image, row-major from the top; alpha 1 on the object, 0 on the background.

@@ -88,22 +88,7 @@ pub const MAX_PIXELS: u64 = 8192 * 4096;
 /// Refuses (naming the flag) an image size or sample count beyond the limits, before anything is
 /// allocated: the sizes of [`Renderer::render`] and of `render`'s flags.
 pub fn check_limits(width: u32, height: u32, spp: u32) -> Result<()> {
-    if width == 0 || height == 0 {
-        return Err(Error::input("--size", format!("{width}x{height} is empty; both sides must be at least 1")));
-    }
-    if width as u64 * height as u64 > MAX_PIXELS {
-        return Err(Error::input(
-            "--size",
-            format!("{width}x{height} is more than the limit of {MAX_PIXELS} pixels (8192x4096) for a GPU frame"),
-        ));
-    }
-    if spp == 0 {
-        return Err(Error::input("--spp", "must be at least 1"));
-    }
-    if spp > MAX_SPP {
-        return Err(Error::input("--spp", format!("{spp} is more than the limit of {MAX_SPP} samples per pixel")));
-    }
-    Ok(())
+    crate::imageio::check_image_limits((width, height, spp), (MAX_PIXELS, MAX_SPP), "8192x4096", "a GPU frame")
 }
 
 /// What one frame renders.
