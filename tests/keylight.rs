@@ -196,3 +196,46 @@ fn splitting_the_key_light_cuts_the_sh9_diffuse_error() {
         }
     }
 }
+
+/// The light samples of a frame (`LightSampling::frame_samples`) are an unbiased estimate of the
+/// lights' power `Σ (L − background) dω` (the mean of `L / pdf`): at 4096 samples within 1 % on a
+/// synthetic sun and on three real maps with lights, for frame 0 and a shifted frame (measured
+/// ≤ 0.25 %; what is left is the sign and colour mix of a light's ring texels within a stratum, while
+/// a pdf missing its `sin θ` or a sample read from the wrong texel is off by far more). Every sample
+/// lies inside its light's cone (the `extent` the renderer tests BRDF samples against) and is finite.
+#[test]
+fn frame_light_samples_estimate_the_lights_power() {
+    let mut maps = vec![sun_map([0.5, 0.6, 0.8], DVec3::new(0.3, 0.8, -0.52).normalize(), 0.04, [4e3, 3.5e3, 3e3])];
+    for name in ["sky.exr", "studio.exr", "warehouse.exr"] {
+        maps.push(Environment::load(&common::asset(&format!("hdri/{name}"))).unwrap());
+    }
+    const M: u32 = 4096;
+    for env in &maps {
+        let keys = keylight::detect(env);
+        assert!(!keys.lights.is_empty(), "{}: no light", env.origin);
+        let sampling = keys.sampling(env).expect("the lights carry energy");
+        let power: Vec<f64> = (0..3).map(|c| keys.lights.iter().map(|l| l.power[c]).sum()).collect();
+        for shift in [[0.5, 0.0, 0.0], [0.137, 0.61, 0.29]] {
+            let samples = sampling.frame_samples(M, shift);
+            assert_eq!(samples.len(), M as usize);
+            let mut est = [0.0f64; 3];
+            for s in &samples {
+                assert!(s.iter().all(|v| v.is_finite()), "{}: {s:?}", env.origin);
+                let d = DVec3::new(s[0] as f64, s[1] as f64, s[2] as f64);
+                assert!(
+                    keys.lights.iter().any(|l| d.dot(l.direction) >= l.extent.cos()),
+                    "{}: a light sample outside every cone",
+                    env.origin
+                );
+                for c in 0..3 {
+                    est[c] += s[4 + c] as f64 / s[3] as f64 / M as f64;
+                }
+            }
+            for c in 0..3 {
+                let rel = (est[c] / power[c] - 1.0).abs();
+                eprintln!("{} channel {c}: {rel:.5}", env.origin);
+                assert!(rel < 0.01, "{} channel {c} shift {shift:?}: {} against {}", env.origin, est[c], power[c]);
+            }
+        }
+    }
+}

@@ -71,16 +71,26 @@ float facet_lobe(GpuLobe l, vec3 wi, vec3 wo) {
     return f;
 }
 
-// F_k(wi, wo) per unit albedo (SPEC §2), one way.
-float lobe_one_way(uint k, vec3 wi, vec3 wo) {
-    GpuLobe l = brdf_lobe(k);
-    if (brdf_form() == 2u) return facet_lobe(l, wi, wo);
-    bool gm = brdf_form() == 1u;
+// F_k(wi, wo) per unit albedo (SPEC §2), one way, for a lobe in hand and the material's form.
+float lobe_one_way_of(GpuLobe l, uint form, vec3 wi, vec3 wo) {
+    if (form == 2u) return facet_lobe(l, wi, wo);
+    bool gm = form == 1u;
     float f = ward(gm, l.shape, wi, quat_rotate(l.rotation, wo));
     if (l.flags.x != 0u) {
         f = 0.5 * (f + ward(gm, l.shape, wi, quat_rotate(quat_conjugate(l.rotation), wo)));
     }
     return f;
+}
+
+// F_k(wi, wo) per unit albedo (SPEC §2), one way.
+float lobe_one_way(uint k, vec3 wi, vec3 wo) { return lobe_one_way_of(brdf_lobe(k), brdf_form(), wi, wo); }
+
+// One lobe's term of f per unit albedo, symmetrised when `sym`; 0 below the horizon.
+float lobe_value(GpuLobe l, uint form, bool sym, vec3 wi, vec3 wo) {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+    float t = lobe_one_way_of(l, form, wi, wo);
+    if (sym) t = 0.5 * (t + lobe_one_way_of(l, form, wo, wi));
+    return t;
 }
 
 // f(wi, wo) of SPEC §2 (symmetrised when the material says so); 0 below the horizon.

@@ -49,8 +49,9 @@ pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Re
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
     let mut r = renderer()?;
     brdf_shop::interrupt::install();
-    let (rows, files) = unless_interrupted(error_vs_time::report(&mut r, &plan, out, true))?;
-    print!("{}", error_vs_time::summary(&rows, &plan, r.device_name()));
+    let (_, files) = unless_interrupted(error_vs_time::report(&mut r, &plan, out, true))?;
+    // The summary as written (files: CSV, plot, summary).
+    print!("{}", std::fs::read_to_string(&files[2]).map_err(|e| brdf_shop::Error::io(&files[2], e))?);
     for f in files {
         println!("wrote {}", f.display());
     }

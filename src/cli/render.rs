@@ -1,6 +1,6 @@
 //! `brdf-shop render`: one headless GPU frame (SPEC §4) written as EXR or PNG, with `--timings`.
 
-use brdf_shop::render::{Estimator, Renderer};
+use brdf_shop::render::{Estimator, Renderer, View};
 use brdf_shop::vk::Context;
 
 use super::scene::{self, SceneArgs};
@@ -21,9 +21,17 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     }
     let mut frame = renderer.render(&scene.material, &scene.settings)?;
     let passes: Vec<(String, f64)> = frame.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
-    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes)?;
+    // The key estimator's decision about the map (which lights it split off, and the threshold).
+    let key_lights = (scene.settings.estimator == Estimator::Key && scene.settings.view == View::Mesh)
+        .then(|| renderer.key_lights())
+        .flatten();
+    let json = key_lights.map(|k| k.to_json());
+    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, json)?;
     let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
     scene::report_env(&scene);
+    if let Some(k) = key_lights {
+        eprintln!("key estimator: {}", k.describe());
+    }
     eprintln!(
         "rendered {}x{} on {} in {total:.3} ms of GPU time ({} passes); wrote {}",
         frame.image.width,

@@ -18,6 +18,9 @@ pub enum ViewArg {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EstimatorArg {
+    /// Key lights split off the map (light + BRDF sampling) and the residual prefiltered (issue 10).
+    Key,
+    /// The paper's filtered importance sampling.
     Fis,
     Plain,
     Mis,
@@ -39,9 +42,11 @@ pub struct SceneArgs {
     /// Image size `WxH`.
     #[arg(long, default_value = "512x512", allow_hyphen_values = true)]
     pub size: String,
-    /// Samples per pixel per lobe (fis, plain) or per pixel (mis, reference).
+    /// Samples per pixel per lobe component (key, fis, plain; key adds as many light samples) or per
+    /// pixel (mis, reference).
     #[arg(long, allow_hyphen_values = true)]
     pub spp: Option<u32>,
+    /// The estimator of the mesh view (default key).
     #[arg(long, value_enum)]
     pub estimator: Option<EstimatorArg>,
     /// Read the environment at level 0 only (the `plain` estimator).
@@ -146,7 +151,8 @@ pub fn load(
     check_outputs(args)?;
     let (width, height) = parse_size(&args.size)?;
     let estimator = match (args.estimator, args.no_prefilter) {
-        (None, false) | (Some(EstimatorArg::Fis), false) => Estimator::Fis,
+        (None, false) | (Some(EstimatorArg::Key), false) => Estimator::Key,
+        (Some(EstimatorArg::Fis), false) => Estimator::Fis,
         (None, true) | (Some(EstimatorArg::Plain), _) => Estimator::Plain,
         (Some(EstimatorArg::Mis), false) => Estimator::Mis,
         (Some(e), true) => {
@@ -217,10 +223,15 @@ pub fn write_outputs(
     device: &str,
     scene: &Scene,
     passes: &[(String, f64)],
+    key_lights: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
     let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
     let bytes = brdf_shop::imageio::encode(&args.out, image.width, image.height, &image.pixels, args.exposure)?;
-    let timings = args.timings.as_ref().map(|t| timings_json(device, scene, passes).map(|j| (t, j))).transpose()?;
+    let timings = args
+        .timings
+        .as_ref()
+        .map(|t| timings_json(device, scene, passes, key_lights.clone()).map(|j| (t, j)))
+        .transpose()?;
     let mut outputs: Vec<(&Path, &[u8])> = vec![(&args.out, &bytes)];
     if let Some((t, j)) = &timings {
         outputs.push((t.as_path(), j.as_bytes()));
@@ -236,9 +247,14 @@ pub fn write_outputs(
 }
 
 /// The `--timings` JSON: device, estimator, size, samples, and per pass its name and GPU ms.
-fn timings_json(device: &str, scene: &Scene, passes: &[(String, f64)]) -> anyhow::Result<String> {
+fn timings_json(
+    device: &str,
+    scene: &Scene,
+    passes: &[(String, f64)],
+    key_lights: Option<serde_json::Value>,
+) -> anyhow::Result<String> {
     let s = &scene.settings;
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "device": device,
         "estimator": s.estimator.name(),
         "view": if s.view == View::Mesh { "mesh" } else { "canvas" },
@@ -247,5 +263,8 @@ fn timings_json(device: &str, scene: &Scene, passes: &[(String, f64)]) -> anyhow
         "passes": passes.iter().map(|(n, ms)| serde_json::json!({"name": n, "ms": ms})).collect::<Vec<_>>(),
         "total_ms": passes.iter().map(|p| p.1).sum::<f64>(),
     });
+    if let Some(k) = key_lights {
+        json["key_lights"] = k;
+    }
     Ok(serde_json::to_string_pretty(&json).context("encoding timings")? + "\n")
 }

@@ -430,13 +430,13 @@ impl App {
             width: l.mesh_w,
             height: l.height,
             spp: self.spp,
-            estimator: Estimator::Fis,
+            estimator: Estimator::Key,
             view: View::Mesh,
             camera: state.camera(),
             light: state.settings.canvas.light,
             intensity: state.settings.canvas.intensity,
         };
-        // Any change shows the fast `fis` image and restarts the accumulation; while nothing changes,
+        // Any change shows the fast `key` image and restarts the accumulation; while nothing changes,
         // each frame adds REFINE_STEP samples of `mis` (the true image, not the prefiltered blur).
         let key = format!("{m:?}{:?}{:?}{:?}", mesh_settings.camera, l, self.env.origin);
         let refining = !self.opts.quit || self.opts.converge;
@@ -514,7 +514,7 @@ impl App {
         graph::draw(&mut rgba, w, (gx, gy, w - gx, h - gy), &m, state.settings.canvas.light, self.log_graph);
         let sums = m.energy_sums();
         let quality =
-            if self.refine_samples == 0 { "fis 8 spp".to_string() } else { format!("mis {} spp", self.refine_samples) };
+            if self.refine_samples == 0 { "key 8 spp".to_string() } else { format!("mis {} spp", self.refine_samples) };
         gpu.window.set_title(&format!(
             "brdf-shop — {} — {} lobe(s), Σρ = ({:.2}, {:.2}, {:.2}) — {quality}, {:.1} GPU ms — {}",
             state.brush.name(),
@@ -537,7 +537,7 @@ impl App {
         worker.request(&m);
         let report = worker.latest(&m);
         let quality = if self.refine_samples == 0 {
-            format!("mesh view: fis {} spp", self.spp)
+            format!("mesh view: key {} spp", self.spp)
         } else {
             format!("mesh view: mis {} spp", self.refine_samples)
         };
@@ -684,7 +684,7 @@ impl App {
     }
 }
 
-/// What a frame rendered of the mesh view: the fast `fis` image after a change (an interaction
+/// What a frame rendered of the mesh view: the fast `key` image after a change (an interaction
 /// frame), `REFINE_STEP` more `mis` samples (a refinement frame), or nothing new.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum FrameKind {
@@ -1083,7 +1083,7 @@ pub fn run(opts: Options) -> Result<()> {
             app.frame_ms.len(),
             l.map_or(0, |l| l.width),
             l.map_or(0, |l| l.height),
-            if app.refine_samples == 0 { "fis 8".to_string() } else { format!("mis {}", app.refine_samples) }
+            if app.refine_samples == 0 { "key 8".to_string() } else { format!("mis {}", app.refine_samples) }
         );
     }
     drop(app.gpu.take());

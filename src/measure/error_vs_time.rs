@@ -3,7 +3,9 @@
 //! background that every estimator shares) and its error against the converged CPU reference
 //! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
 //! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
-//! (log–log) and `error-vs-time.md` (equal-error speed-ups and the `fis` bias floor).
+//! (log–log: the error–time frontier of each estimator) and `error-vs-time.md` (the default `key`
+//! estimator's error at `fis`-8's GPU time, its equal-error speed-ups and time to 2 %, the maps'
+//! key-light decisions; the older estimators against `fis` 8 spp and the `fis` bias floor).
 
 use std::path::{Path, PathBuf};
 
@@ -165,8 +167,12 @@ pub fn cached_reference(
     Ok(im)
 }
 
-/// Runs the plan; `progress` shows a bar over the scenes.
-pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<Vec<Row>> {
+/// Per map name, the `key` estimator's key-light decision (`KeyLightSummary::describe`).
+pub type Decisions = Vec<(String, String)>;
+
+/// Runs the plan; `progress` shows a bar over the scenes. Returns the rows and, per map, the `key`
+/// estimator's key-light decision.
+pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Decisions)> {
     let cache = out.join("cache");
     let mesh = Mesh::sphere();
     renderer.set_mesh(&mesh)?;
@@ -181,9 +187,13 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
         b
     });
     let mut rows = Vec::new();
+    let mut decisions = Vec::new();
     for env_name in &plan.envs {
         let env = super::environment(&plan.hdri, env_name)?;
         renderer.set_environment(&env)?;
+        if let Some(k) = renderer.key_lights() {
+            decisions.push((env_name.to_string(), k.describe()));
+        }
         for mat_name in &plan.materials {
             let Some((_, m)) = all.iter().find(|(n, _)| n == mat_name) else {
                 return Err(Error::input("error-vs-time", format!("unknown material {mat_name}")));
@@ -192,7 +202,7 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
                 b.set_message(format!("{env_name}/{mat_name}"));
             }
             let reference = cached_reference(&cache, m, &env, &mesh, &camera, plan.size, plan.reference_spp)?;
-            for estimator in [Estimator::Fis, Estimator::Plain, Estimator::Mis] {
+            for estimator in Estimator::ALL {
                 for &spp in &plan.spps {
                     // Ctrl-C (the CLI installs the handler): stop before the next measurement.
                     if crate::interrupt::requested() {
@@ -248,7 +258,7 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    Ok(rows)
+    Ok((rows, decisions))
 }
 
 pub fn csv(rows: &[Row]) -> String {
@@ -298,9 +308,35 @@ fn curve(rows: &[Row], scene: &str, estimator: Estimator) -> Vec<(u32, f64, f64)
     c
 }
 
-/// The Markdown summary: per scene, `fis` at 8 spp, what `plain` and `mis` need to match it, and
-/// where `fis` stops improving.
-pub fn summary(rows: &[Row], plan: &Plan, device: &str) -> String {
+/// The error of a measured curve `(spp, ms, error)` at GPU time `ms`, interpolated log–log between
+/// the measured points around it: `None` where `ms` lies outside the curve's times.
+pub fn error_at(curve: &[(u32, f64, f64)], ms: f64) -> Option<f64> {
+    let mut pts: Vec<(f64, f64)> = curve.iter().map(|&(_, t, e)| (t.max(1e-9), e.max(1e-12))).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Time is noisy: keep each point's best error up to its time (the frontier, falling with time).
+    let mut frontier: Vec<(f64, f64)> = Vec::new();
+    for (t, e) in pts {
+        let best = frontier.last().map_or(e, |l| l.1.min(e));
+        frontier.push((t, best));
+    }
+    let first = frontier.first()?;
+    if ms < first.0 {
+        return None;
+    }
+    for w in frontier.windows(2) {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        if ms <= t1 {
+            let s = if t1 > t0 { (ms.ln() - t0.ln()) / (t1.ln() - t0.ln()) } else { 1.0 };
+            return Some((e0.ln() + s * (e1.ln() - e0.ln())).exp());
+        }
+    }
+    (ms <= frontier.last()?.0 * 1.0000001).then(|| frontier.last().map(|l| l.1)).flatten()
+}
+
+/// The Markdown summary: per scene, `fis` at 8 spp against the default `key` estimator at the same
+/// GPU time, `key`'s equal-error speed-up over each older estimator, the time `key` needs for 2 %,
+/// and the map's key-light decision; then the older estimators against `fis` 8 spp.
+pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, String)]) -> String {
     let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
     scenes.dedup();
     let mut s = format!(
@@ -308,6 +344,43 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str) -> String {
          Error: relative L1 over the object. GPU ms: shading passes only (median of {2} frames).\n\n",
         plan.size, plan.reference_spp, plan.repeats
     );
+    s.push_str("## The default estimator (`key`)\n\n");
+    s.push_str("| scene | fis 8 spp: error, ms | key at that ms: error | key 8 spp: error, ms | speed-up at key-8's error over fis / plain / mis | key to 2 %: spp, ms |\n");
+    s.push_str("| --- | --- | --- | --- | --- | --- |\n");
+    for scene in &scenes {
+        let fis = curve(rows, scene, Estimator::Fis);
+        let key = curve(rows, scene, Estimator::Key);
+        let Some(&(_, fms, fe)) = fis.iter().find(|p| p.0 == 8).or(fis.last()) else { continue };
+        let Some(&(_, kms, ke)) = key.iter().find(|p| p.0 == 8).or(key.last()) else { continue };
+        let at = match error_at(&key, fms) {
+            Some(e) => format!("{e:.4}"),
+            None => format!("— (key at 1 spp takes {:.2} ms)", key.first().map_or(0.0, |p| p.1)),
+        };
+        let speedups: Vec<String> = [Estimator::Fis, Estimator::Plain, Estimator::Mis]
+            .iter()
+            .map(|&e| match reach(&curve(rows, scene, e), ke) {
+                Some((_, ms)) => format!("{:.1}×", ms / kms.max(1e-9)),
+                None => format!("> {:.0}×", curve(rows, scene, e).last().map_or(0.0, |p| p.1) / kms.max(1e-9)),
+            })
+            .collect();
+        let two = match reach(&key, 0.02) {
+            Some((spp, ms)) => format!("{spp:.0}, {ms:.2}"),
+            None => format!("not within {} spp", plan.spps.last().copied().unwrap_or(0)),
+        };
+        s.push_str(&format!(
+            "| {scene} | {fe:.4}, {fms:.2} | {at} | {ke:.4}, {kms:.2} | {} | {two} |\n",
+            speedups.join(" / ")
+        ));
+    }
+    s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more. A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");
+    if !decisions.is_empty() {
+        s.push_str("Key lights per map (`key` splits these off; a map without one gets no light term):\n\n");
+        for (map, d) in decisions {
+            s.push_str(&format!("- {map}: {d}\n"));
+        }
+        s.push('\n');
+    }
+    s.push_str("## The paper's estimator and the others\n\n");
     s.push_str("| scene | fis 8 spp: error, ms | plain to match: spp, ms, speed-up | mis to match: spp, ms, speed-up | fis floor: error (from spp) |\n");
     s.push_str("| --- | --- | --- | --- | --- |\n");
     for scene in &scenes {
@@ -335,9 +408,15 @@ pub fn plot(rows: &[Row], device: &str) -> Result<Vec<u8>> {
     scenes.dedup();
     let mut series = Vec::new();
     for scene in &scenes {
-        for (k, e) in [Estimator::Fis, Estimator::Plain, Estimator::Mis].into_iter().enumerate() {
+        for e in Estimator::ALL {
             let points = curve(rows, scene, e).into_iter().map(|(_, ms, err)| (ms, err)).collect();
-            series.push(Series { label: e.name().to_string(), colour: k, points });
+            let colour = match e {
+                Estimator::Fis => 0,
+                Estimator::Plain => 1,
+                Estimator::Mis => 2,
+                Estimator::Key => 3,
+            };
+            series.push(Series { label: e.name().to_string(), colour, points });
         }
     }
     loglog_png(
@@ -354,11 +433,11 @@ pub fn plot(rows: &[Row], device: &str) -> Result<Vec<u8>> {
 pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Vec<PathBuf>)> {
     super::require_maps(&plan.hdri, &plan.envs)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let rows = run(renderer, plan, out, progress)?;
+    let (rows, decisions) = run(renderer, plan, out, progress)?;
     let device = renderer.device_name().to_string();
     let files = vec![out.join("error-vs-time.csv"), out.join("error-vs-time.png"), out.join("error-vs-time.md")];
     // All three as one step: every temporary file is written before the first rename.
-    let (csv, png, md) = (csv(&rows), plot(&rows, &device)?, summary(&rows, plan, &device));
+    let (csv, png, md) = (csv(&rows), plot(&rows, &device)?, summary(&rows, plan, &device, &decisions));
     crate::fsio::write_all_atomic(&[(&files[0], csv.as_bytes()), (&files[1], &png), (&files[2], md.as_bytes())])?;
     Ok((rows, files))
 }

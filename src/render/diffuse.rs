@@ -9,10 +9,11 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 4] = [
+const BINDINGS: [vk::DescriptorType; 5] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
 
@@ -26,20 +27,26 @@ impl DiffusePass {
         Ok(DiffusePass { pipeline })
     }
 
-    pub fn record(&self, rec: &Recording<'_>, diffuse: [f64; 3]) -> Result<()> {
+    /// Adds `ρ_d/π · E(n)`; `residual`: E of the map without its key lights plus each light as a
+    /// distant source, `power · max(n·d, 0)` (the `key` estimator).
+    pub fn record(&self, rec: &Recording<'_>, diffuse: [f64; 3], residual: bool) -> Result<()> {
         let t = rec.targets;
         let env = rec.env()?;
+        let keys = env.keys.as_ref().filter(|_| residual);
         let set = rec.set(
             &self.pipeline,
             &[
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
-                Binding::Storage(&env.sh),
+                Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
+                // The lights (a stand-in with none).
+                Binding::Storage(keys.map_or(&env.sh, |k| &k.cones)),
             ],
         )?;
         let mut push = rec.push;
         push.fparams = [diffuse[0] as f32, diffuse[1] as f32, diffuse[2] as f32, 0.0];
+        push.params[0] = u32::from(keys.is_some());
         rec.dispatch(&self.pipeline, set, &push);
         Ok(())
     }

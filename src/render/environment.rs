@@ -1,12 +1,14 @@
 //! The environment on the GPU: the equirect texture with its full mip chain (filtered across the
 //! `u` seam on the CPU, sampled with `u` repeating), the 9 SH irradiance coefficients, and the
-//! importance-sampling tables. Built once per environment and kept until it changes.
+//! importance-sampling tables, and the key lights split off the map with the residual's own texture and
+//! SH (the `key` estimator). Built once per environment and kept until it changes.
 
 use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
-use crate::scene::env::Environment;
+use crate::scene::env::{Environment, MipLevel};
+use crate::scene::keylight::{self, KeyLights};
 use crate::vk::{image, Buffer, Context, Image};
 use crate::Result;
 
@@ -24,6 +26,9 @@ pub struct GpuEnvironment {
     pub linear: bool,
     /// What this was built from (to rebuild only when the environment changes).
     pub key: (String, usize, usize, u64),
+    /// The map's key lights, when it has any.
+    pub keys: Option<GpuKeyLights>,
+    pub key_summary: KeyLightSummary,
 }
 
 /// Identifies an environment's contents cheaply: origin, size and a hash of the texels.
@@ -53,86 +58,268 @@ fn storage(ctx: &Context, data: &[f32], name: &str) -> Result<Buffer> {
     Buffer::upload(ctx, bytemuck::cast_slice(data), vk::BufferUsageFlags::STORAGE_BUFFER, name)
 }
 
-impl GpuEnvironment {
-    pub fn new(ctx: &Context, env: &Environment) -> Result<GpuEnvironment> {
-        let (w, h) = (env.width as u32, env.height as u32);
-        let format = vk::Format::R32G32B32A32_SFLOAT;
-        let linear = image::supports(ctx, format, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
-        let levels = env.mip_chain();
-        let mut bytes: Vec<u8> = Vec::new();
-        let mut offsets = Vec::with_capacity(levels.len());
-        for level in &levels {
-            offsets.push(bytes.len() as u64);
-            bytes.extend_from_slice(bytemuck::cast_slice(&level.texels));
+/// The key lights of a map on the GPU (issue 10's estimator): the residual map (lights replaced by
+/// their local background) with its mip chain and SH, and the lights' cones. Absent when the map has
+/// no key light.
+pub struct GpuKeyLights {
+    pub residual: Image,
+    /// `Â_l · L_lm` of the residual, 9 × `vec4`.
+    pub sh: Buffer,
+    /// `uvec4(lights, 0, 0, 0)`, then per light `vec4(direction, cos extent)` and
+    /// `vec4(power rgb, 0)`.
+    pub cones: Buffer,
+    /// Per texel of the map: the lights' radiance (rgb, read nearest) and the pdf over `(u, v)` of
+    /// [`keylight::LightSampling`] (alpha): one fetch gives a BRDF sample both.
+    pub texels: Image,
+    /// Where each frame's light samples come from.
+    pub sampling: keylight::LightSampling,
+    pub count: u32,
+}
+
+/// What the renderer decided about a map's key lights (reported by `render --timings` and `report`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct KeyLightSummary {
+    pub lights: Vec<crate::scene::keylight::KeyLight>,
+    pub share: f64,
+    pub threshold: f64,
+}
+
+impl KeyLightSummary {
+    /// The decision as JSON (`render --timings`): threshold, share and each light.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "decision": self.describe(),
+            "threshold": self.threshold,
+            "threshold_over_mean": crate::scene::keylight::THRESHOLD_OVER_MEAN,
+            "share": self.share,
+            "lights": self.lights.iter().map(|l| serde_json::json!({
+                "direction": [l.direction.x, l.direction.y, l.direction.z],
+                "angular_radius_deg": l.angular_radius.to_degrees(),
+                "extent_deg": l.extent.to_degrees(),
+                "solid_angle": l.solid_angle,
+                "power": l.power,
+                "texels": l.texels,
+            })).collect::<Vec<_>>(),
+        })
+    }
+
+    /// One line: `2 key lights (41.2 % of the energy; threshold 30 × mean = 12.5): 3.3° at (…), …`.
+    pub fn describe(&self) -> String {
+        use crate::scene::keylight::{MIN_SHARE, THRESHOLD_OVER_MEAN};
+        if self.lights.is_empty() {
+            return format!(
+                "no key light (none above {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4} carries {:.0} % of the energy): no key-light pass",
+                self.threshold,
+                MIN_SHARE * 100.0
+            );
         }
-        let staging = Buffer::new(
-            ctx,
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-            "env.staging",
-        )?;
-        let mut staging = staging;
-        staging.write(&bytes);
-        let texture = match Image::new(
-            ctx,
-            (w, h),
-            format,
-            levels.len() as u32,
-            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-            "env.texture",
-        ) {
-            Ok(t) => t,
+        let each: Vec<String> = self
+            .lights
+            .iter()
+            .map(|l| {
+                let d = l.direction;
+                format!("radius {:.2}° toward ({:.3}, {:.3}, {:.3})", l.angular_radius.to_degrees(), d.x, d.y, d.z)
+            })
+            .collect();
+        format!(
+            "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}",
+            self.lights.len(),
+            self.share * 100.0,
+            self.threshold,
+            each.join("; ")
+        )
+    }
+}
+
+/// Uploads `env`'s mip chain into a new sampled image.
+fn upload_texture(ctx: &Context, env: &Environment, name: &str) -> Result<Image> {
+    upload_levels(ctx, &env.mip_chain(), name)
+}
+
+/// Uploads mip levels (level 0 first) into a new sampled image.
+fn upload_levels(ctx: &Context, levels: &[MipLevel], name: &str) -> Result<Image> {
+    let (w, h) = (levels[0].width as u32, levels[0].height as u32);
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut offsets = Vec::with_capacity(levels.len());
+    for level in levels {
+        offsets.push(bytes.len() as u64);
+        bytes.extend_from_slice(bytemuck::cast_slice(&level.texels));
+    }
+    let mut staging =
+        Buffer::new(ctx, bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu, name)?;
+    staging.write(&bytes);
+    let texture = match Image::new(
+        ctx,
+        (w, h),
+        FORMAT,
+        levels.len() as u32,
+        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        name,
+    ) {
+        Ok(t) => t,
+        Err(e) => {
+            staging.destroy(ctx);
+            return Err(e);
+        }
+    };
+    let uploaded = ctx.commands.run(&ctx.device, |cmd| {
+        texture.record_upload(ctx, cmd, &staging, &offsets);
+        Ok(())
+    });
+    staging.destroy(ctx);
+    if let Err(e) = uploaded {
+        texture.destroy(ctx);
+        return Err(e);
+    }
+    Ok(texture)
+}
+
+const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+fn sh_buffer(ctx: &Context, env: &Environment, name: &str) -> Result<Buffer> {
+    let sh: Vec<f32> = irradiance_coefficients(&env.sh9()).iter().flat_map(|c| vec4(*c)).collect();
+    storage(ctx, &sh, name)
+}
+
+/// Destroys `made` when `result` is an error (the buffers a constructor made before failing).
+fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<(T, Vec<Buffer>)> {
+    match result {
+        Ok(t) => Ok((t, made)),
+        Err(e) => {
+            for b in made {
+                b.destroy(ctx);
+            }
+            Err(e)
+        }
+    }
+}
+
+impl GpuKeyLights {
+    /// The light samples of frame `seed` (`M = samples`): frame 0 takes the middle of each stratum,
+    /// a later frame shifts the strata and the points within texels by a hash of its seed.
+    pub fn frame_samples(&self, samples: u32, seed: u32) -> Vec<[f32; 8]> {
+        let shift = if seed == 0 {
+            [0.5, 0.0, 0.0]
+        } else {
+            let mut h = crate::rng::Pcg32::new(u64::from(seed), 0x6b65_796c_6967_6874);
+            [h.next_f64(), h.next_f64(), h.next_f64()]
+        };
+        self.sampling.frame_samples(samples.max(1), shift)
+    }
+
+    fn new(ctx: &Context, env: &Environment, keys: &KeyLights) -> Result<GpuKeyLights> {
+        let residual = upload_texture(ctx, &keys.residual, "keylights.residual")?;
+        let mut made: Vec<Buffer> = Vec::new();
+        let built = (|| -> Result<keylight::LightSampling> {
+            made.push(sh_buffer(ctx, &keys.residual, "keylights.sh")?);
+            let Some(sampling) = keys.sampling(env) else {
+                return Err(crate::Error::input(env.origin.clone(), "the key lights carry no energy"));
+            };
+            made.push(storage(ctx, &cone_table(&keys.lights), "keylights.cones")?);
+            Ok(sampling)
+        })();
+        let texels = built.and_then(|sampling| {
+            let map = keys.light_map(env);
+            let texels = map.iter().zip(&sampling.pdf_uv).map(|(l, &p)| [l[0], l[1], l[2], p]).collect();
+            let level = MipLevel { width: env.width, height: env.height, texels };
+            upload_levels(ctx, &[level], "keylights.texels").map(|t| (t, sampling))
+        });
+        let ((texels, sampling), made) = match or_destroy(ctx, texels, made) {
+            Ok(r) => r,
             Err(e) => {
-                staging.destroy(ctx);
+                residual.destroy(ctx);
                 return Err(e);
             }
         };
-        let uploaded = ctx.commands.run(&ctx.device, |cmd| {
-            texture.record_upload(ctx, cmd, &staging, &offsets);
-            Ok(())
-        });
-        staging.destroy(ctx);
-        if let Err(e) = uploaded {
-            texture.destroy(ctx);
-            return Err(e);
+        let [sh, cones]: [Buffer; 2] = match made.try_into() {
+            Ok(b) => b,
+            Err(_) => unreachable!("the closure pushed two buffers before succeeding"),
+        };
+        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, count: keys.lights.len() as u32 })
+    }
+
+    fn destroy(self, ctx: &Context) {
+        self.residual.destroy(ctx);
+        self.texels.destroy(ctx);
+        for b in [self.sh, self.cones] {
+            b.destroy(ctx);
         }
+    }
+}
+
+/// The `Lights` buffer of `keylight.comp` (see [`GpuKeyLights::cones`]).
+pub fn cone_table(lights: &[crate::scene::keylight::KeyLight]) -> Vec<f32> {
+    let mut out: Vec<f32> = vec![f32::from_bits(lights.len() as u32), 0.0, 0.0, 0.0];
+    for l in lights {
+        let d = l.direction;
+        out.extend_from_slice(&[d.x as f32, d.y as f32, d.z as f32, l.extent.cos() as f32]);
+        out.extend_from_slice(&[l.power[0] as f32, l.power[1] as f32, l.power[2] as f32, 0.0]);
+    }
+    out
+}
+
+impl GpuEnvironment {
+    pub fn new(ctx: &Context, env: &Environment) -> Result<GpuEnvironment> {
+        let (w, h) = (env.width as u32, env.height as u32);
+        let linear = image::supports(ctx, FORMAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+        let texture = upload_texture(ctx, env, "env.texture")?;
         let mut made: Vec<Buffer> = Vec::new();
         let built = (|| -> Result<vk::Sampler> {
-            let sh: Vec<f32> = irradiance_coefficients(&env.sh9()).iter().flat_map(|c| vec4(*c)).collect();
-            made.push(storage(ctx, &sh, "env.sh")?);
+            made.push(sh_buffer(ctx, env, "env.sh")?);
             let (marginal, conditional, pdf) = sampling_tables(env);
             made.push(storage(ctx, &marginal, "env.marginal")?);
             made.push(storage(ctx, &conditional, "env.conditional")?);
             made.push(storage(ctx, &pdf, "env.pdf")?);
             image::equirect_sampler(ctx, linear)
         })();
-        match built {
-            Ok(sampler) => {
-                let [sh, marginal, conditional, pdf]: [Buffer; 4] = match made.try_into() {
-                    Ok(b) => b,
-                    Err(_) => unreachable!("the closure pushed four buffers before succeeding"),
-                };
-                Ok(GpuEnvironment {
-                    texture,
-                    sampler,
-                    sh,
-                    marginal,
-                    conditional,
-                    pdf,
-                    width: w,
-                    height: h,
-                    linear,
-                    key: key(env),
-                })
-            }
+        let (sampler, made) = match or_destroy(ctx, built, made) {
+            Ok(r) => r,
             Err(e) => {
-                for b in made {
-                    b.destroy(ctx);
-                }
                 texture.destroy(ctx);
-                Err(e)
+                return Err(e);
             }
+        };
+        let [sh, marginal, conditional, pdf]: [Buffer; 4] = match made.try_into() {
+            Ok(b) => b,
+            Err(_) => unreachable!("the closure pushed four buffers before succeeding"),
+        };
+        let detected = keylight::detect(env);
+        let mut out = GpuEnvironment {
+            texture,
+            sampler,
+            sh,
+            marginal,
+            conditional,
+            pdf,
+            width: w,
+            height: h,
+            linear,
+            key: key(env),
+            keys: None,
+            key_summary: KeyLightSummary {
+                lights: detected.lights.clone(),
+                share: detected.share,
+                threshold: detected.threshold,
+            },
+        };
+        if !detected.lights.is_empty() {
+            match GpuKeyLights::new(ctx, env, &detected) {
+                Ok(k) => out.keys = Some(k),
+                Err(e) => {
+                    out.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The texture and SH the key estimator's residual passes read: the residual's where the map
+    /// has key lights, the map's own otherwise.
+    pub fn residual(&self) -> (&Image, &Buffer) {
+        match &self.keys {
+            Some(k) => (&k.residual, &k.sh),
+            None => (&self.texture, &self.sh),
         }
     }
 
@@ -142,6 +329,9 @@ impl GpuEnvironment {
         self.texture.destroy(ctx);
         for b in [self.sh, self.marginal, self.conditional, self.pdf] {
             b.destroy(ctx);
+        }
+        if let Some(k) = self.keys {
+            k.destroy(ctx);
         }
     }
 }

@@ -118,15 +118,15 @@ pub fn halton_groups(samples: u32) -> Vec<HaltonGroup> {
         .collect()
 }
 
-/// The MIS sequence: per sample two `vec4`s, Halton in bases 2, 3, 5 (BRDF sample) and 7, 11
-/// (environment sample), from index 1.
+/// The MIS sequence: per sample two `vec4`s, Halton in bases 2, 3, 5 (BRDF sample) and 7, 11, 13
+/// (environment sample; `mis` uses two, the key-light pass three), from index 1.
 pub fn mis_sequence(samples: u32) -> Vec<[f32; 4]> {
     let mut out = Vec::with_capacity(2 * samples as usize);
     for s in 0..samples.max(1) as u64 {
         let i = s + 1;
         let h = |b| radical_inverse(i, b) as f32;
         out.push([h(2), h(3), h(5), 0.0]);
-        out.push([h(7), h(11), 0.0, 0.0]);
+        out.push([h(7), h(11), h(13), 0.0]);
     }
     out
 }

@@ -46,6 +46,11 @@ pub enum Estimator {
     Plain,
     /// Environment and BRDF sampling combined by the balance heuristic, diffuse included.
     Mis,
+    /// Issue 10's default: the map's key lights split off; each lobe pass integrates the residual map
+    /// (prefiltered, rotated Halton points, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe under the
+    /// lights (light and BRDF samples, balance heuristic); the diffuse pass takes the residual's SH9
+    /// and the lights as distant sources.
+    Key,
 }
 
 impl Estimator {
@@ -54,6 +59,7 @@ impl Estimator {
             "fis" => Some(Estimator::Fis),
             "plain" => Some(Estimator::Plain),
             "mis" => Some(Estimator::Mis),
+            "key" => Some(Estimator::Key),
             _ => None,
         }
     }
@@ -63,8 +69,23 @@ impl Estimator {
             Estimator::Fis => "fis",
             Estimator::Plain => "plain",
             Estimator::Mis => "mis",
+            Estimator::Key => "key",
         }
     }
+
+    /// Every estimator, the default first.
+    pub const ALL: [Estimator; 4] = [Estimator::Key, Estimator::Fis, Estimator::Plain, Estimator::Mis];
+
+    /// The names `--estimator` accepts, for messages: `key|fis|plain|mis`.
+    pub fn names() -> String {
+        Estimator::ALL.map(Estimator::name).join("|")
+    }
+}
+
+/// The light samples the `key` estimator's lobe passes take per pixel for `spp` BRDF samples per
+/// component.
+pub fn key_light_samples(spp: u32) -> u32 {
+    spp.max(1)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -194,6 +215,9 @@ pub struct Renderer {
     /// Where in its sequence the `mis` estimator starts: successive frames with offsets 0, N, 2N …
     /// are independent parts of one long estimate (the editor's progressive refinement).
     pub mis_offset: u32,
+    /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
+    /// differently, so their mean converges (progressive refinement).
+    pub seed: u32,
     passes: Option<Passes>,
     env: Option<GpuEnvironment>,
     mesh: Option<GpuMesh>,
@@ -222,6 +246,7 @@ impl Renderer {
         Ok(Renderer {
             scalar_lobes: false,
             mis_offset: 0,
+            seed: 0,
             passes: Some(passes),
             env: None,
             mesh: None,
@@ -267,6 +292,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// The key lights found in the current environment (what the `key` estimator splits off).
+    pub fn key_lights(&self) -> Option<&environment::KeyLightSummary> {
+        self.env.as_ref().map(|e| &e.key_summary)
+    }
+
     /// Whether the environment texture is filtered linearly (false only on devices without linear
     /// filtering of `RGBA32F`).
     pub fn linear_filtering(&self) -> bool {
@@ -304,7 +334,9 @@ impl Renderer {
                 self.sequence =
                     Some((spp, Buffer::upload(&self.ctx, bytemuck::cast_slice(&seq), usage, "mis.sequence")?));
             }
-        } else if self.halton.as_ref().is_none_or(|s| s.0 != spp) {
+        }
+        // The lobe passes bind the table (the `key` variant computes its points and ignores it).
+        if estimator != Estimator::Mis && self.halton.as_ref().is_none_or(|s| s.0 != spp) {
             if let Some((_, b)) = self.halton.take() {
                 b.destroy(&self.ctx);
             }
@@ -336,14 +368,24 @@ impl Renderer {
             self.targets = Some(Targets::new(&self.ctx, w, h)?);
         }
         // Which lobes get a pass: non-zero albedo only.
-        let prefilter = settings.estimator == Estimator::Fis;
+        let prefilter = matches!(settings.estimator, Estimator::Fis | Estimator::Key);
+        let key = settings.estimator == Estimator::Key;
+        let lights = key && self.env.as_ref().is_some_and(|e| e.keys.is_some());
         let lobes: Vec<(u32, lobe::Variant)> = material
             .lobes
             .iter()
             .enumerate()
             .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
             .map(|(i, l)| {
-                (i as u32, lobe::Variant { vec4: !self.scalar_lobes, ..lobe::Variant::of(material, l, prefilter) })
+                (
+                    i as u32,
+                    lobe::Variant {
+                        vec4: !self.scalar_lobes,
+                        key,
+                        lights,
+                        ..lobe::Variant::of(material, l, prefilter)
+                    },
+                )
             })
             .collect();
         if mesh_view {
@@ -358,12 +400,21 @@ impl Renderer {
         let material_buf =
             Buffer::upload(ctx, &gpu::material_bytes(material), vk::BufferUsageFlags::STORAGE_BUFFER, "material")?;
         let mut frame_objects =
-            FrameObjects { material: Some(material_buf), readback: None, pool: None, timestamps: None };
+            FrameObjects { material: Some(material_buf), lights: None, readback: None, pool: None, timestamps: None };
         let result = (|| -> Result<Frame> {
             let targets = self.targets.as_ref().expect("made above");
             frame_objects.readback = Some(readback::buffer_for(ctx, &targets.accum)?);
+            if let (true, Some(keys)) = (lights, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
+                let samples = keys.frame_samples(key_light_samples(settings.spp), self.seed);
+                frame_objects.lights = Some(Buffer::upload(
+                    ctx,
+                    bytemuck::cast_slice(&samples),
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    "keylights.frame",
+                )?);
+            }
             frame_objects.pool = Some(descriptor::pool(ctx, 8 + lobes.len() as u32, "frame.descriptors")?);
-            frame_objects.timestamps = Some(Timestamps::new(ctx, 4 + lobes.len() as u32)?);
+            frame_objects.timestamps = Some(Timestamps::new(ctx, 5 + lobes.len() as u32)?);
             let passes = self.passes.as_ref().expect("passes live until drop");
             let mut push = Push::default();
             camera_push(&settings.camera, w, h, &mut push);
@@ -379,6 +430,7 @@ impl Renderer {
                 env: self.env.as_ref(),
             };
             let material_buf = frame_objects.material.as_ref().expect("made above");
+            let frame_objects_lights = frame_objects.lights.as_ref();
             let readback_buf = frame_objects.readback.as_ref().expect("made above");
             let ts = frame_objects.timestamps.as_mut().expect("made above");
             ctx.commands.run(&ctx.device, |cmd| {
@@ -401,15 +453,24 @@ impl Renderer {
                                 passes.mis.record(&rec, self.mis_offset, settings.spp, material_buf, seq)
                             })?;
                         }
-                        Estimator::Fis | Estimator::Plain => {
+                        Estimator::Fis | Estimator::Plain | Estimator::Key => {
                             if material.diffuse.iter().any(|&d| d != 0.0) {
-                                ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse))?;
+                                ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
                             }
                             let halton = &self.halton.as_ref().expect("made above").1;
                             for &(i, v) in &lobes {
                                 let name = format!("lobe{i}[{}]", v.tag());
                                 ts.time(ctx, cmd, &name, || {
-                                    passes.lobe.record(&rec, v, i, settings.spp, material_buf, halton)
+                                    let job = lobe::Job {
+                                        index: i,
+                                        samples: settings.spp,
+                                        seed: self.seed,
+                                        material: material_buf,
+                                        halton,
+                                        light_samples: frame_objects_lights
+                                            .map(|b| (b, key_light_samples(settings.spp))),
+                                    };
+                                    passes.lobe.record(&rec, v, &job)
                                 })?;
                             }
                         }
@@ -432,6 +493,7 @@ impl Renderer {
 /// The objects of one frame, destroyed after it whatever happened.
 struct FrameObjects {
     material: Option<Buffer>,
+    lights: Option<Buffer>,
     readback: Option<Buffer>,
     pool: Option<vk::DescriptorPool>,
     timestamps: Option<Timestamps>,
@@ -441,7 +503,7 @@ impl FrameObjects {
     fn destroy(self, ctx: &Context) {
         // SAFETY: `Commands::run` waited for the submission (or nothing was submitted).
         let _ = unsafe { ctx.raw().device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"));
-        if let Some(b) = self.material {
+        for b in [self.material, self.lights].into_iter().flatten() {
             b.destroy(ctx);
         }
         if let Some(b) = self.readback {

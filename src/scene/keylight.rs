@@ -46,6 +46,9 @@ pub struct KeyLight {
     pub power: [f64; 3],
     /// How many texels were replaced.
     pub texels: usize,
+    /// The largest angle, in radians, between `direction` and a point of a replaced texel (its centre
+    /// plus half its diagonal): outside this cone the light contributes nothing.
+    pub extent: f64,
 }
 
 /// The key lights of a map and what is left of it.
@@ -88,6 +91,104 @@ fn median(env: &Environment, texels: &[usize]) -> [f32; 3] {
         *o = v[v.len() / 2];
     }
     out
+}
+
+/// Sampling the lights' map (`env − residual`): texel `k` in proportion to `|mean(L_k)| sin θ`, uniform
+/// within it (the renderer reads the lights' map texel by texel, nearest, so `L / pdf` is constant
+/// per texel up to colour and sign; a bilinear read mixed a sun's core into its dim neighbours and
+/// made rare samples huge). The texels with weight are kept in Morton (Z) order about the brightest
+/// one, so that an interval of their CDF is a compact patch of a light: the stratified values
+/// `(m + ξ)/M` of [`LightSampling::frame_samples`] take one sample from each of `M` equal-power patches.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightSampling {
+    /// The texels with weight, in Morton order, with the CDF before each.
+    order: Vec<(usize, f64)>,
+    /// `W·H · w_k / Σ w` for every texel of the map (0 away from the lights): the pdf over `(u, v)`.
+    pub pdf_uv: Vec<f32>,
+    /// The lights' map.
+    map: Vec<[f32; 3]>,
+    width: usize,
+    height: usize,
+}
+
+impl LightSampling {
+    /// The `m` light samples of one frame, the same for every pixel: the CDF inverted at
+    /// `(k + shift[0]) / m`, the point within the texel from Halton bases 7 and 11 (index `k + 1`)
+    /// shifted by `shift[1..]` (mod 1). Per sample `[direction xyz, pdf over solid angle, L rgb, 0]`;
+    /// a sample at a pole (pdf undefined) is all zero (it adds nothing but still counts as one of `m`).
+    pub fn frame_samples(&self, m: u32, shift: [f64; 3]) -> Vec<[f32; 8]> {
+        let (w, h) = (self.width, self.height);
+        let mut out = Vec::with_capacity(m as usize);
+        for k in 0..m as u64 {
+            let x = ((k as f64 + shift[0].fract()) / m as f64).clamp(0.0, 1.0);
+            let at = self.order.partition_point(|p| p.1 <= x).saturating_sub(1);
+            let Some(&(texel, _)) = self.order.get(at) else {
+                out.push([0.0; 8]);
+                continue;
+            };
+            let du = (crate::rng::radical_inverse(k + 1, 7) + shift[1]).fract();
+            let dv = (crate::rng::radical_inverse(k + 1, 11) + shift[2]).fract();
+            let (u, v) = (((texel % w) as f64 + du) / w as f64, ((texel / w) as f64 + dv) / h as f64);
+            let sin_t = (std::f64::consts::PI * v).sin();
+            if !(sin_t > 0.0) {
+                out.push([0.0; 8]);
+                continue;
+            }
+            let d = Environment::direction(u, v);
+            let pdf = self.pdf_uv[texel] as f64 / (2.0 * std::f64::consts::PI * std::f64::consts::PI * sin_t);
+            let l = self.map[texel];
+            out.push([d.x as f32, d.y as f32, d.z as f32, pdf as f32, l[0], l[1], l[2], 0.0]);
+        }
+        out
+    }
+}
+
+impl KeyLights {
+    /// The CDF and pdf of the lights' map; `None` when it carries no energy.
+    pub fn sampling(&self, env: &Environment) -> Option<LightSampling> {
+        let (w, h) = (env.width, env.height);
+        let map = self.light_map(env);
+        let size = |t: &[f32; 3]| (t[0] as f64 + t[1] as f64 + t[2] as f64).abs() / 3.0;
+        let weights: Vec<(usize, f64)> = (0..w * h)
+            .map(|k| {
+                let j = k / w;
+                (k, size(&map[k]) * (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin())
+            })
+            .filter(|&(_, x)| x > 0.0)
+            .collect();
+        let total: f64 = weights.iter().map(|p| p.1).sum();
+        if !(total > 0.0) {
+            return None;
+        }
+        let mut pdf_uv = vec![0.0f32; w * h];
+        for &(k, x) in &weights {
+            pdf_uv[k] = (x / total * (w * h) as f64) as f32;
+        }
+        let centre = weights.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |p| p.0 % w);
+        let morton = |k: usize| {
+            let (i, j) = (((k % w) + w + w / 2 - centre) % w, k / w);
+            (0..16)
+                .fold(0u64, |m, b| m | ((((i >> b) & 1) as u64) << (2 * b)) | ((((j >> b) & 1) as u64) << (2 * b + 1)))
+        };
+        let mut weights = weights;
+        weights.sort_by_key(|p| morton(p.0));
+        let mut acc = 0.0;
+        let order: Vec<(usize, f64)> = weights
+            .iter()
+            .map(|&(k, x)| {
+                let start = acc / total;
+                acc += x;
+                (k, start)
+            })
+            .collect();
+        Some(LightSampling { order, pdf_uv, map, width: w, height: h })
+    }
+
+    /// The lights as a map: `env − residual`, zero away from the lights and negative where a light's
+    /// ring was darker than its background (the sampling tables of the key-light pass use `|L|`).
+    pub fn light_map(&self, env: &Environment) -> Vec<[f32; 3]> {
+        env.texels.iter().zip(&self.residual.texels).map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]]).collect()
+    }
 }
 
 /// Finds the key lights of `env` (see the module note). A map without any gives no lights and a
@@ -156,6 +257,7 @@ pub fn detect(env: &Environment) -> KeyLights {
         let background = median(env, &outer);
         let bg_lum = luminance(background);
         let (mut power, mut centroid, mut solid_angle) = ([0.0f64; 3], DVec3::ZERO, 0.0);
+        let mut centres = Vec::with_capacity(region.len());
         for &k in &region {
             let (i, j) = (k % w, k / w);
             let t = env.texels[k];
@@ -165,14 +267,29 @@ pub fn detect(env: &Environment) -> KeyLights {
             let excess = (lum[k] - bg_lum).max(0.0) * d_omega[j];
             centroid += excess * texel_direction(i, j, w, h);
             solid_angle += d_omega[j];
+            centres.push((j, texel_direction(i, j, w, h)));
         }
         let Some(direction) = crate::brdf::material::unit(centroid) else { continue };
+        // Half a texel's diagonal: the row's width in u (narrower near the poles) and the height in v.
+        let half_diagonal = |j: usize| {
+            let sin_t = (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin();
+            let du = std::f64::consts::PI / w as f64 * sin_t.max(1.0 / h as f64);
+            let dv = std::f64::consts::PI / (2.0 * h as f64);
+            // Bilinear filtering spreads a texel over its neighbours: one more texel each way.
+            3.0 * (du * du + dv * dv).sqrt()
+        };
+        let extent = centres
+            .iter()
+            .map(|(j, d)| d.dot(direction).clamp(-1.0, 1.0).acos() + half_diagonal(*j))
+            .fold(0.0, f64::max)
+            .min(std::f64::consts::PI);
         let light = KeyLight {
             direction,
             angular_radius: (1.0 - solid_angle / (2.0 * std::f64::consts::PI)).clamp(-1.0, 1.0).acos(),
             solid_angle,
             power,
             texels: region.len(),
+            extent,
         };
         candidates.push((light, region, background));
     }
