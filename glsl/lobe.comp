@@ -67,9 +67,8 @@ vec3 g_light_sum;
 uint lobe_form() { return FACET ? 2u : (GM ? 1u : 0u); }
 
 bool in_cones(vec3 d) {
-    bool any_cone = false;
-    for (uint k = 0u; k < uint(MAX_LIGHTS); k++) any_cone = any_cone || (k < g_lights && dot(d, g_cone[k].xyz) >= g_cone[k].w);
-    return any_cone;
+    return dot(d, g_cone[0].xyz) >= g_cone[0].w || dot(d, g_cone[1].xyz) >= g_cone[1].w
+        || dot(d, g_cone[2].xyz) >= g_cone[2].w || dot(d, g_cone[3].xyz) >= g_cone[3].w;
 }
 
 // The lights' texel toward d: rgb L_key, alpha the pdf over solid angle.
@@ -290,6 +289,7 @@ void main() {
     GpuLobe l = MAT.lobes[pc.params.x];
     if (LIGHTS) {
         g_lights = min(lights.count.x, uint(MAX_LIGHTS));
+        // Missing lights repeat the last one (the cone test ORs all four).
         for (uint k = 0u; k < uint(MAX_LIGHTS); k++) g_cone[k] = lights.v[2u * min(k, max(g_lights, 1u) - 1u)];
     }
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
