@@ -16,10 +16,11 @@
 // KEY (issue 10's estimator): the same estimate of the residual map (the key lights removed; bound as
 // env_tex), with the Halton points computed here instead of read from the buffer (Cranley–Patterson
 // shifted per frame, see below), and the lod bias taken from fparams.x instead of the paper's +1. With LIGHTS, the lobe under the key lights (L_key = L − L_res,
-// read texel by texel) is added by multiple importance sampling: the frame's M = params.w light
-// samples (the same for every pixel, made on the CPU: `LightSampling::frame_samples`) and the N
-// samples of each component above, balance heuristic over all of them: a sample ω adds F(ω) L_key cos θ /
-// (M p_light + N Σ_c p_c), F the whole lobe (brdf.glsl `lobe_value`), p_c each component's pdf.
+// read texel by texel) is added by multiple importance sampling: the frame's params.w light samples
+// (the same for every pixel, made on the CPU: `LightSampling::frame_samples`, M of the lights' bright
+// texels and M_neg of their dark ringing) and the N samples of each component above, balance
+// heuristic over all of them: a sample ω adds F(ω) L_key cos θ / (M_set p_set + N Σ_c p_c), F the
+// whole lobe (brdf.glsl `lobe_value`), p_c each component's pdf.
 // Frames: seed (params.z) 0 takes the sequence as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
 #extension GL_GOOGLE_include_directive : require
@@ -49,8 +50,8 @@ layout(std430, set = 0, binding = 5) readonly buffer Halton { Group g[]; } halto
 layout(set = 0, binding = 6) uniform sampler2D light_tex;
 // count: (lights, CDF entries, 0, 0); per light vec4(direction, cos extent), vec4(power rgb, 0).
 layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
-// The frame's M = params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
-// vec4(direction, pdf over solid angle), vec4(L_key rgb, 0).
+// The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
+// vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
 layout(std430, set = 0, binding = 8) readonly buffer LightSamples { vec4 v[]; } light_set;
 
 #define MAX_LIGHTS 4
@@ -61,7 +62,7 @@ uint g_lights;
 GpuLobe g_lobe;
 vec3 g_wo;
 vec4 g_q;
-float g_m, g_n;
+float g_n;
 vec3 g_light_sum;
 
 uint lobe_form() { return FACET ? 2u : (GM ? 1u : 0u); }
@@ -71,12 +72,15 @@ bool in_cones(vec3 d) {
         || dot(d, g_cone[2].xyz) >= g_cone[2].w || dot(d, g_cone[3].xyz) >= g_cone[3].w;
 }
 
-// The lights' texel toward d: rgb L_key, alpha the pdf over solid angle.
+// The lights' texel toward d: rgb L_key, alpha its set's sample count (fparams.z bright, fparams.w
+// dark; the texture's alpha is the pdf over (u, v) within the set, negative for the dark set) times
+// the pdf over solid angle.
 vec4 light_texel(vec3 d) {
     vec2 uv = equirect_uv(d);
     vec4 t = texelFetch(light_tex, min(ivec2(uv * vec2(pc.size.zw)), ivec2(pc.size.zw) - 1), 0);
     float sin_t = sqrt(max(1.0 - d.y * d.y, 0.0));
-    return vec4(t.rgb, sin_t > 0.0 ? t.a / (2.0 * PI * PI * sin_t) : 0.0);
+    float count = t.a < 0.0 ? pc.fparams.w : pc.fparams.z;
+    return vec4(t.rgb, sin_t > 0.0 ? count * abs(t.a) / (2.0 * PI * PI * sin_t) : 0.0);
 }
 
 // Σ_c p_c(ω_i) over the components main() samples (each with N samples), mirroring it.
@@ -103,9 +107,10 @@ float pdf_sum(vec3 wi) {
     return p;
 }
 
-// The light term of one sample ω_i (local) of radiance L and light pdf pl, drawn by either strategy.
+// The light term of one sample ω_i (local) of radiance L and count-weighted light pdf pl, drawn by
+// either strategy.
 void add_light(vec3 wi, vec3 L, float pl) {
-    float denom = g_m * pl + g_n * pdf_sum(wi);
+    float denom = pl + g_n * pdf_sum(wi);
     vec3 c = lobe_value(g_lobe, lobe_form(), SYM, wi, g_wo) * L * wi.z / denom;
     if (denom > 0.0 && all(lessThan(abs(c), vec3(3e38)))) g_light_sum += c;
 }
@@ -119,7 +124,7 @@ void brdf_sample_light(vec3 wi, vec3 d, float weight, float p) {
         add_light(wi, t.rgb, t.a);
         return;
     }
-    float denom = g_m * t.a + g_n * p;
+    float denom = t.a + g_n * p;
     vec3 c = weight * p * t.rgb / denom;
     if (denom > 0.0 && all(lessThan(abs(c), vec3(3e38)))) g_light_sum += c;
 }
@@ -309,7 +314,7 @@ void main() {
     float half_sym = SYM ? 0.5 : 1.0;
     vec4 q = ROTATED ? l.rotation : vec4(0.0, 0.0, 0.0, 1.0);
     vec3 sum = vec3(0.0);
-    g_lobe = l; g_wo = wo; g_q = q; g_m = float(pc.params.w); g_n = n; g_light_sum = vec3(0.0);
+    g_lobe = l; g_wo = wo; g_q = q; g_n = n; g_light_sum = vec3(0.0);
     if (LIGHTS) light_samples(f);
     if (FACET) {
         // Facet frame Q: samples about Q⁻¹ ω_o, ω_i = Q x; the split lobe's other face: Q⁻¹.

@@ -117,7 +117,8 @@ pub struct Job<'a> {
     pub seed: u32,
     pub material: &'a Buffer,
     pub halton: &'a Buffer,
-    pub light_samples: Option<(&'a Buffer, u32)>,
+    /// The frame's light samples, how many, and the sample counts of the bright and dark sets.
+    pub light_samples: Option<(&'a Buffer, u32, [f32; 2])>,
 }
 
 pub struct LobePass {
@@ -155,7 +156,7 @@ impl LobePass {
         }
         // Stand-ins where the variant reads no key lights (the layout is the same for every variant).
         let (cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
-        let (samples_buf, m) = light_samples.filter(|_| variant.lights).unwrap_or((&env.pdf, 0));
+        let (samples_buf, m, counts) = light_samples.filter(|_| variant.lights).unwrap_or((&env.pdf, 0, [0.0; 2]));
         let set = rec.set(
             pipeline,
             &[
@@ -172,7 +173,7 @@ impl LobePass {
         )?;
         let mut push = rec.push;
         push.params = [index, samples, seed, m];
-        push.fparams[0] = KEY_LOD_BIAS;
+        push.fparams = [KEY_LOD_BIAS, 0.0, counts[0], counts[1]];
         rec.dispatch(pipeline, set, &push);
         Ok(())
     }

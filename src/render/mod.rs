@@ -405,13 +405,16 @@ impl Renderer {
             let targets = self.targets.as_ref().expect("made above");
             frame_objects.readback = Some(readback::buffer_for(ctx, &targets.accum)?);
             if let (true, Some(keys)) = (lights, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
-                let samples = keys.frame_samples(key_light_samples(settings.spp), self.seed);
-                frame_objects.lights = Some(Buffer::upload(
+                let m = key_light_samples(settings.spp);
+                let samples = keys.frame_samples(m, self.seed);
+                let buffer = Buffer::upload(
                     ctx,
                     bytemuck::cast_slice(&samples),
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     "keylights.frame",
-                )?);
+                )?;
+                let counts = [m as f32, keys.sampling.dark_samples(m) as f32];
+                frame_objects.lights = Some((buffer, samples.len() as u32, counts));
             }
             frame_objects.pool = Some(descriptor::pool(ctx, 8 + lobes.len() as u32, "frame.descriptors")?);
             frame_objects.timestamps = Some(Timestamps::new(ctx, 5 + lobes.len() as u32)?);
@@ -430,7 +433,7 @@ impl Renderer {
                 env: self.env.as_ref(),
             };
             let material_buf = frame_objects.material.as_ref().expect("made above");
-            let frame_objects_lights = frame_objects.lights.as_ref();
+            let frame_objects_lights = frame_objects.lights.as_ref().map(|(b, n, c)| (b, *n, *c));
             let readback_buf = frame_objects.readback.as_ref().expect("made above");
             let ts = frame_objects.timestamps.as_mut().expect("made above");
             ctx.commands.run(&ctx.device, |cmd| {
@@ -467,8 +470,7 @@ impl Renderer {
                                         seed: self.seed,
                                         material: material_buf,
                                         halton,
-                                        light_samples: frame_objects_lights
-                                            .map(|b| (b, key_light_samples(settings.spp))),
+                                        light_samples: frame_objects_lights,
                                     };
                                     passes.lobe.record(&rec, v, &job)
                                 })?;
@@ -493,7 +495,8 @@ impl Renderer {
 /// The objects of one frame, destroyed after it whatever happened.
 struct FrameObjects {
     material: Option<Buffer>,
-    lights: Option<Buffer>,
+    /// The key lights' samples of this frame, how many, and the bright and dark sets' counts.
+    lights: Option<(Buffer, u32, [f32; 2])>,
     readback: Option<Buffer>,
     pool: Option<vk::DescriptorPool>,
     timestamps: Option<Timestamps>,
@@ -503,7 +506,7 @@ impl FrameObjects {
     fn destroy(self, ctx: &Context) {
         // SAFETY: `Commands::run` waited for the submission (or nothing was submitted).
         let _ = unsafe { ctx.raw().device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"));
-        for b in [self.material, self.lights].into_iter().flatten() {
+        for b in [self.material, self.lights.map(|l| l.0)].into_iter().flatten() {
             b.destroy(ctx);
         }
         if let Some(b) = self.readback {

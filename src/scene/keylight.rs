@@ -95,15 +95,20 @@ fn median(env: &Environment, texels: &[usize]) -> [f32; 3] {
 
 /// Sampling the lights' map (`env − residual`): texel `k` in proportion to `|mean(L_k)| sin θ`, uniform
 /// within it (the renderer reads the lights' map texel by texel, nearest, so `L / pdf` is constant
-/// per texel up to colour and sign; a bilinear read mixed a sun's core into its dim neighbours and
-/// made rare samples huge). The texels with weight are kept in Morton (Z) order about the brightest
-/// one, so that an interval of their CDF is a compact patch of a light: the stratified values
-/// `(m + ξ)/M` of [`LightSampling::frame_samples`] take one sample from each of `M` equal-power patches.
+/// per texel up to colour; a bilinear read mixed a sun's core into its dim neighbours and made rare
+/// samples huge). The texels brighter than their background and those darker (a sun's ringing) are
+/// two sets, each sampled on its own: one stratum never mixes a core with its ring (whose samples
+/// would cancel), and a frame takes `M` samples of the bright set and `M_neg` of the dark one (the
+/// balance heuristic weighs each texel by its own set's count). Within a set the texels are kept in
+/// Morton (Z) order about the brightest one, so that an interval of the set's CDF is a compact patch:
+/// the stratified values `(m + ξ)/M` of [`LightSampling::frame_samples`] take one sample from each
+/// of `M` equal-power patches.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightSampling {
-    /// The texels with weight, in Morton order, with the CDF before each.
-    order: Vec<(usize, f64)>,
-    /// `W·H · w_k / Σ w` for every texel of the map (0 away from the lights): the pdf over `(u, v)`.
+    /// The bright and the dark set: texels in Morton order, with the CDF before each.
+    sets: [Vec<(usize, f64)>; 2],
+    /// Per texel of the map: `W·H · w_k / Σ_set w`, the pdf over `(u, v)` within its set, negative for
+    /// the dark set; 0 away from the lights.
     pub pdf_uv: Vec<f32>,
     /// The lights' map.
     map: Vec<[f32; 3]>,
@@ -112,76 +117,84 @@ pub struct LightSampling {
 }
 
 impl LightSampling {
-    /// The `m` light samples of one frame, the same for every pixel: the CDF inverted at
-    /// `(k + shift[0]) / m`, the point within the texel from Halton bases 7 and 11 (index `k + 1`)
-    /// shifted by `shift[1..]` (mod 1). Per sample `[direction xyz, pdf over solid angle, L rgb, 0]`;
-    /// a sample at a pole (pdf undefined) is all zero (it adds nothing but still counts as one of `m`).
+    /// How many samples the dark set takes beside `m` of the bright one: none without dark texels,
+    /// else a quarter as many (at least one).
+    pub fn dark_samples(&self, m: u32) -> u32 {
+        if self.sets[1].is_empty() {
+            0
+        } else {
+            (m / 4).max(1)
+        }
+    }
+
+    /// The light samples of one frame, the same for every pixel: `m` of the bright set, then
+    /// [`Self::dark_samples`] of the dark one; in each set the CDF is inverted at `(k + shift[0]) / n`,
+    /// the point within the texel from Halton bases 7 and 11 (index `k + 1`) shifted by `shift[1..]`
+    /// (mod 1). Per sample `[direction xyz, n · pdf over solid angle, L rgb, 0]` (the pdf times its
+    /// set's count, as the balance heuristic wants it); a sample at a pole (pdf undefined) is all zero
+    /// (it adds nothing but still counts).
     pub fn frame_samples(&self, m: u32, shift: [f64; 3]) -> Vec<[f32; 8]> {
         let (w, h) = (self.width, self.height);
-        let mut out = Vec::with_capacity(m as usize);
-        for k in 0..m as u64 {
-            let x = ((k as f64 + shift[0].fract()) / m as f64).clamp(0.0, 1.0);
-            let at = self.order.partition_point(|p| p.1 <= x).saturating_sub(1);
-            let Some(&(texel, _)) = self.order.get(at) else {
-                out.push([0.0; 8]);
-                continue;
-            };
-            let du = (crate::rng::radical_inverse(k + 1, 7) + shift[1]).fract();
-            let dv = (crate::rng::radical_inverse(k + 1, 11) + shift[2]).fract();
-            let (u, v) = (((texel % w) as f64 + du) / w as f64, ((texel / w) as f64 + dv) / h as f64);
-            let sin_t = (std::f64::consts::PI * v).sin();
-            if !(sin_t > 0.0) {
-                out.push([0.0; 8]);
-                continue;
+        let mut out = Vec::new();
+        for (set, n) in self.sets.iter().zip([m, self.dark_samples(m)]) {
+            for k in 0..n as u64 {
+                let x = ((k as f64 + shift[0].fract()) / n as f64).clamp(0.0, 1.0);
+                let at = set.partition_point(|p| p.1 <= x).saturating_sub(1);
+                let Some(&(texel, _)) = set.get(at) else {
+                    out.push([0.0; 8]);
+                    continue;
+                };
+                let du = (crate::rng::radical_inverse(k + 1, 7) + shift[1]).fract();
+                let dv = (crate::rng::radical_inverse(k + 1, 11) + shift[2]).fract();
+                let (u, v) = (((texel % w) as f64 + du) / w as f64, ((texel / w) as f64 + dv) / h as f64);
+                let sin_t = (std::f64::consts::PI * v).sin();
+                if !(sin_t > 0.0) {
+                    out.push([0.0; 8]);
+                    continue;
+                }
+                let d = Environment::direction(u, v);
+                let pdf =
+                    (self.pdf_uv[texel] as f64).abs() / (2.0 * std::f64::consts::PI * std::f64::consts::PI * sin_t);
+                let l = self.map[texel];
+                out.push([d.x as f32, d.y as f32, d.z as f32, (n as f64 * pdf) as f32, l[0], l[1], l[2], 0.0]);
             }
-            let d = Environment::direction(u, v);
-            let pdf = self.pdf_uv[texel] as f64 / (2.0 * std::f64::consts::PI * std::f64::consts::PI * sin_t);
-            let l = self.map[texel];
-            out.push([d.x as f32, d.y as f32, d.z as f32, pdf as f32, l[0], l[1], l[2], 0.0]);
         }
         out
     }
 }
 
 impl KeyLights {
-    /// The CDF and pdf of the lights' map; `None` when it carries no energy.
+    /// The sampling of the lights' map; `None` when it carries no energy.
     pub fn sampling(&self, env: &Environment) -> Option<LightSampling> {
         let (w, h) = (env.width, env.height);
         let map = self.light_map(env);
-        let size = |t: &[f32; 3]| (t[0] as f64 + t[1] as f64 + t[2] as f64).abs() / 3.0;
-        let weights: Vec<(usize, f64)> = (0..w * h)
-            .map(|k| {
-                let j = k / w;
-                (k, size(&map[k]) * (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin())
-            })
-            .filter(|&(_, x)| x > 0.0)
-            .collect();
-        let total: f64 = weights.iter().map(|p| p.1).sum();
-        if !(total > 0.0) {
-            return None;
-        }
-        let mut pdf_uv = vec![0.0f32; w * h];
-        for &(k, x) in &weights {
-            pdf_uv[k] = (x / total * (w * h) as f64) as f32;
-        }
-        let centre = weights.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |p| p.0 % w);
+        let sum = |k: usize| map[k][0] as f64 + map[k][1] as f64 + map[k][2] as f64;
+        let weight = |k: usize| sum(k).abs() / 3.0 * (std::f64::consts::PI * ((k / w) as f64 + 0.5) / h as f64).sin();
+        let centre = (0..w * h).max_by(|&a, &b| weight(a).total_cmp(&weight(b))).map_or(0, |k| k % w);
         let morton = |k: usize| {
             let (i, j) = (((k % w) + w + w / 2 - centre) % w, k / w);
             (0..16)
                 .fold(0u64, |m, b| m | ((((i >> b) & 1) as u64) << (2 * b)) | ((((j >> b) & 1) as u64) << (2 * b + 1)))
         };
-        let mut weights = weights;
-        weights.sort_by_key(|p| morton(p.0));
-        let mut acc = 0.0;
-        let order: Vec<(usize, f64)> = weights
-            .iter()
-            .map(|&(k, x)| {
-                let start = acc / total;
-                acc += x;
-                (k, start)
-            })
-            .collect();
-        Some(LightSampling { order, pdf_uv, map, width: w, height: h })
+        let mut pdf_uv = vec![0.0f32; w * h];
+        let mut sets: [Vec<(usize, f64)>; 2] = [Vec::new(), Vec::new()];
+        for (s, set) in sets.iter_mut().enumerate() {
+            let mut texels: Vec<usize> =
+                (0..w * h).filter(|&k| weight(k) > 0.0 && (sum(k) < 0.0) == (s == 1)).collect();
+            texels.sort_by_key(|&k| morton(k));
+            let total: f64 = texels.iter().map(|&k| weight(k)).sum();
+            let mut acc = 0.0;
+            for k in texels {
+                let sign = if s == 1 { -1.0 } else { 1.0 };
+                pdf_uv[k] = (sign * weight(k) / total * (w * h) as f64) as f32;
+                set.push((k, acc / total));
+                acc += weight(k);
+            }
+        }
+        if sets[0].is_empty() {
+            return None;
+        }
+        Some(LightSampling { sets, pdf_uv, map, width: w, height: h })
     }
 
     /// The lights as a map: `env − residual`, zero away from the lights and negative where a light's
