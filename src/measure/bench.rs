@@ -1,6 +1,6 @@
 //! `bench`: GPU milliseconds per pass (timestamps; median, minimum and maximum of repeated frames)
-//! against lobe count, image size, triangle count and samples per lobe, and the `vec4` lobe pass
-//! against its scalar loop. Prints a table; writes JSON on request.
+//! against lobe count, image size, triangle count and samples per lobe, the estimators (`key`, `fis`,
+//! `plain`, `mis`) on one frame, and the `vec4` lobe pass against its scalar loop. Prints a table; writes JSON on request.
 
 use std::path::PathBuf;
 
@@ -139,7 +139,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     let sphere = Mesh::sphere();
     let four = material(4);
     let mut out = Vec::new();
-    let total = plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2;
+    let total = plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2 + 4;
     let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
     // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
     let tick = || {
@@ -180,6 +180,12 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             sphere.triangle_count(),
             measure(r, &four, &settings(plan.size, spp), plan.repeats)?,
         );
+        tick()?;
+    }
+    // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
+    for e in Estimator::ALL {
+        let s = Settings { estimator: e, ..settings(plan.size, 8) };
+        push("estimator", e.name().to_string(), sphere.triangle_count(), measure(r, &four, &s, plan.repeats)?);
         tick()?;
     }
     for vec4 in [true, false] {
