@@ -64,6 +64,32 @@ fn render_writes_exr_png_and_timings() {
     assert_eq!(&names[..3], ["gbuffer", "background", "diffuse"], "{names:?}");
     assert!(names[3..].iter().all(|n| n.starts_with("lobe")) && names.len() > 3, "{names:?}");
     assert!(t["passes"].as_array().unwrap().iter().all(|p| p["ms"].as_f64().unwrap() >= 0.0));
+    // The default `key` estimator states its decision: studio's lamp, split off, its lobes with lights.
+    assert_eq!(t["estimator"], "key");
+    let k = &t["key_lights"];
+    assert_eq!(k["lights"].as_array().map(Vec::len), Some(1), "{k}");
+    assert!(k["share"].as_f64().unwrap() > 0.5 && k["threshold_over_mean"].as_f64() == Some(30.0), "{k}");
+    assert!(names[3..].iter().all(|n| n.contains("key,lights")), "{names:?}");
+    assert!(stderr.contains("key estimator: 1 key light(s)"), "{stderr}");
+
+    // A map without a compact light: the decision says so and no pass takes the light term.
+    let (code, _, stderr) = run(&[
+        "render",
+        "--env",
+        &hdri("venice.exr"),
+        "--size",
+        "32x32",
+        "--out",
+        exr.to_str().unwrap(),
+        "--timings",
+        timings.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
+    assert_eq!(t["key_lights"]["lights"].as_array().map(Vec::len), Some(0), "{t}");
+    assert!(t["key_lights"]["decision"].as_str().unwrap().starts_with("no key light"), "{t}");
+    let names: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert!(names.iter().any(|n| n.contains("key")) && !names.iter().any(|n| n.contains("lights")), "{names:?}");
 
     let png = out(&dir, "a.png");
     let (code, _, stderr) = run(&[

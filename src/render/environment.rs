@@ -103,12 +103,13 @@ impl KeyLightSummary {
         })
     }
 
-    /// One line: `2 key lights (41.2 % of the energy; threshold 30 × mean = 12.5): 3.3° at (…), …`.
+    /// One line: how many lights, their share of the energy, the threshold, and each light's radius and
+    /// direction (or why there is none).
     pub fn describe(&self) -> String {
         use crate::scene::keylight::{MIN_SHARE, THRESHOLD_OVER_MEAN};
         if self.lights.is_empty() {
             return format!(
-                "no key light (none above {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4} carries {:.0} % of the energy): no key-light pass",
+                "no key light (no compact region above {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4} carries ≥ {:.0} % of the energy): no light term",
                 self.threshold,
                 MIN_SHARE * 100.0
             );
