@@ -61,7 +61,6 @@ uint g_lights;
 // The light MIS: the lobe, its ω_o, frame rotation q, form, light and BRDF sample counts, and the sum.
 GpuLobe g_lobe;
 vec3 g_wo;
-vec4 g_q;
 float g_n;
 vec3 g_light_sum;
 
@@ -83,28 +82,11 @@ vec4 light_texel(vec3 d) {
     return vec4(t.rgb, sin_t > 0.0 ? count * abs(t.a) / (2.0 * PI * PI * sin_t) : 0.0);
 }
 
-// Σ_c p_c(ω_i) over the components main() samples (each with N samples), mirroring it.
+// Σ_c p_c(ω_i) over the components main() samples, each with N samples: brdf.glsl's sum over the
+// lobe's components, halved for a split lobe without rotation (its two views are one, sampled once).
 float pdf_sum(vec3 wi) {
-    vec4 sh = g_lobe.shape, q = g_q;
-    vec3 wo = g_wo;
-    float p = 0.0;
-    if (FACET) {
-        vec4 qi = quat_conjugate(q);
-        p += pdf_lobe(sh, quat_rotate(qi, wo), quat_rotate(qi, wi));
-        if (SPLIT) p += pdf_lobe(sh, quat_rotate(q, wo), quat_rotate(q, wi));
-    } else {
-        vec3 b0 = quat_rotate(q, wo);
-        if (b0.z > 0.0) p += pdf_lobe(sh, b0, wi);
-        if (SPLIT) {
-            vec3 b1 = quat_rotate(quat_conjugate(q), wo);
-            if (b1.z > 0.0) p += pdf_lobe(sh, b1, wi);
-        }
-        if (SYM) {
-            p += pdf_lobe(sh, wo, quat_rotate(q, wi));
-            if (SPLIT) p += pdf_lobe(sh, wo, quat_rotate(quat_conjugate(q), wi));
-        }
-    }
-    return p;
+    float p = lobe_pdf_sum(g_lobe, lobe_form(), SYM, g_wo, wi);
+    return g_lobe.flags.x != 0u && !SPLIT ? 0.5 * p : p;
 }
 
 // The light term of one sample ω_i (local) of radiance L and count-weighted light pdf pl, drawn by
@@ -314,7 +296,7 @@ void main() {
     float half_sym = SYM ? 0.5 : 1.0;
     vec4 q = ROTATED ? l.rotation : vec4(0.0, 0.0, 0.0, 1.0);
     vec3 sum = vec3(0.0);
-    g_lobe = l; g_wo = wo; g_q = q; g_n = n; g_light_sum = vec3(0.0);
+    g_lobe = l; g_wo = wo; g_n = n; g_light_sum = vec3(0.0);
     if (LIGHTS) light_samples(f);
     if (FACET) {
         // Facet frame Q: samples about Q⁻¹ ω_o, ω_i = Q x; the split lobe's other face: Q⁻¹.

@@ -156,27 +156,35 @@ float mixture_total(vec3 wo, out float w_diffuse) {
     return total + w_diffuse;
 }
 
+// Σ over one lobe's sampled components of Walter's pdf of wi: its views (q = R, and R⁻¹ for a split
+// lobe; a forward view only where R wo is above the horizon) and, for a symmetrised material, the
+// reversed terms; in the facet form, each view's facet frame.
+float lobe_pdf_sum(GpuLobe l, uint form, bool sym, vec3 wo, vec3 wi) {
+    uint n = l.flags.x != 0u ? 2u : 1u;
+    float p = 0.0;
+    for (uint j = 0u; j < n; j++) {
+        vec4 q = j == 0u ? l.rotation : quat_conjugate(l.rotation);
+        if (form == 2u) {
+            // Facet frame q: Walter's pdf of q⁻¹ wi about q⁻¹ wo.
+            vec4 qi = quat_conjugate(q);
+            p += pdf_lobe(l.shape, quat_rotate(qi, wo), quat_rotate(qi, wi));
+            continue;
+        }
+        vec3 b = quat_rotate(q, wo);
+        if (b.z > 0.0) p += pdf_lobe(l.shape, b, wi);
+        // Reverse term: x = R wi drawn about wo (j = 1: x = R⁻¹ wi).
+        if (sym) p += pdf_lobe(l.shape, wo, quat_rotate(q, wi));
+    }
+    return p;
+}
+
 float mixture_pdf(vec3 wo, vec3 wi, float total, float w_diffuse) {
     bool sym = brdf_symmetrize();
     float p = w_diffuse * max(wi.z, 0.0) / PI;
     for (uint k = 0u; k < brdf_lobe_count(); k++) {
         GpuLobe l = brdf_lobe(k);
-        uint n = l.flags.x != 0u ? 2u : 1u;
-        float w = l.albedo.w * (sym ? 0.5 : 1.0) / float(n);
-        if (w <= 0.0) continue;
-        for (uint j = 0u; j < n; j++) {
-            vec4 q = j == 0u ? l.rotation : quat_conjugate(l.rotation);
-            if (brdf_form() == 2u) {
-                // Facet frame q: Walter's pdf of q⁻¹ wi about q⁻¹ wo.
-                vec4 qi = quat_conjugate(q);
-                p += w * pdf_lobe(l.shape, quat_rotate(qi, wo), quat_rotate(qi, wi));
-                continue;
-            }
-            vec3 b = quat_rotate(q, wo);
-            if (b.z > 0.0) p += w * pdf_lobe(l.shape, b, wi);
-            // Reverse term: x = R wi drawn about wo (j = 1: x = R⁻¹ wi).
-            if (sym) p += w * pdf_lobe(l.shape, wo, quat_rotate(j == 0u ? l.rotation : quat_conjugate(l.rotation), wi));
-        }
+        float w = l.albedo.w * (sym ? 0.5 : 1.0) / (l.flags.x != 0u ? 2.0 : 1.0);
+        if (w > 0.0) p += w * lobe_pdf_sum(l, brdf_form(), sym, wo, wi);
     }
     return p / total;
 }
