@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use brdf_shop::brdf::{Lobe, Material, Normalization};
 use brdf_shop::brush::canvas::Canvas;
 use brdf_shop::reference::{self, Image};
-use brdf_shop::render::{Estimator, Renderer, Settings, View};
+use brdf_shop::render::{Estimator, Progress, Renderer, Settings, View};
 use brdf_shop::scene::{Camera, Environment, Mesh};
 use brdf_shop::vk::Context;
 use glam::{DQuat, DVec3};
@@ -301,35 +301,37 @@ fn passes_follow_the_scene() {
     assert_eq!(names(&mut r, &m, Estimator::Mis), ["gbuffer", "background", "mis"]);
 }
 
-/// Progressive refinement: four `mis` frames of 16 samples at offsets 0, 16, 32, 48, averaged, are the
-/// one 64-sample estimate (the editor accumulates frames this way). Equal to f32 rounding: 1e-5
-/// relative over the object.
+/// Progressive refinement on the GPU: four refinement frames of 16 `mis` samples, summed in the
+/// mesh view's persistent image and shown as sum / frames, are the one 64-sample estimate (each frame
+/// continues the sequence where the last stopped). Equal to f32 rounding: 1e-5 relative over the
+/// object. One 16-sample frame alone is a different estimate (> 1e-4 away), so the test sees the
+/// frames' offsets; a fresh frame restarts the sum.
 #[test]
-fn mis_frames_at_offsets_add_up_to_one_estimate() {
+fn refinement_frames_accumulate_on_the_gpu_into_one_estimate() {
     let mut r = renderer();
     let e = env("studio.exr");
     r.set_environment(&e).unwrap();
     r.set_mesh(&Mesh::sphere()).unwrap();
     let m = &common::feature_materials()[1].1;
     let whole = r.render(m, &settings(24, 64, Estimator::Mis)).unwrap().image;
-    let mut sum = vec![[0.0f32; 4]; whole.pixels.len()];
+    let mut first = None;
     for k in 0..4 {
-        r.mis_offset = 16 * k;
-        let part = r.render(m, &settings(24, 16, Estimator::Mis)).unwrap().image;
-        for (s, p) in sum.iter_mut().zip(&part.pixels) {
-            for c in 0..4 {
-                s[c] += p[c] / 4.0;
-            }
+        r.begin_frame(m).unwrap();
+        r.record(m, &settings(24, 16, Estimator::Mis), Progress::Refine).unwrap();
+        r.submit_frame(None, None).unwrap();
+        assert_eq!(r.refined_samples(), 16 * (k + 1));
+        if k == 0 {
+            first = Some(r.read_mesh_view().unwrap());
         }
     }
-    r.mis_offset = 0;
-    let avg = Image { width: 24, height: 24, pixels: sum };
+    let avg = r.read_mesh_view().unwrap();
     let err = reference::relative_l1(&avg, &whole).unwrap();
     assert!(err < 1e-5, "{err}");
-    // And a single frame at another offset is a different estimate (the offset is used).
-    r.mis_offset = 16;
-    let other = r.render(m, &settings(24, 64, Estimator::Mis)).unwrap().image;
-    assert!(reference::relative_l1(&other, &whole).unwrap() > 1e-4);
+    assert!(reference::relative_l1(&first.unwrap(), &whole).unwrap() > 1e-4);
+    r.begin_frame(m).unwrap();
+    r.record(m, &settings(24, 16, Estimator::Mis), Progress::Fresh).unwrap();
+    r.submit_frame(None, None).unwrap();
+    assert_eq!(r.refined_samples(), 0);
 }
 
 /// The `key` estimator (issue 10) converges to the reference: at 512 samples per lobe component

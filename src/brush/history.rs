@@ -10,15 +10,22 @@ pub const HISTORY_LIMIT: usize = 1000;
 pub struct History {
     states: Vec<Material>,
     cursor: usize,
+    generation: u64,
 }
 
 impl History {
     pub fn new(initial: Material) -> Self {
-        History { states: vec![initial], cursor: 0 }
+        History { states: vec![initial], cursor: 0, generation: 0 }
     }
 
     pub fn current(&self) -> &Material {
         &self.states[self.cursor]
+    }
+
+    /// Changes whenever the current material may have changed (push, amend, undo, redo): what a
+    /// view compares to know it must re-render, instead of comparing materials.
+    pub fn generation(&self) -> u64 {
+        self.generation
     }
 
     /// Records a new state (nothing when it equals the current one).
@@ -32,6 +39,7 @@ impl History {
             self.states.remove(0);
         }
         self.cursor = self.states.len() - 1;
+        self.generation += 1;
     }
 
     /// Replaces the current state without a new undo step (a slider still being dragged: the whole
@@ -39,6 +47,7 @@ impl History {
     pub fn amend(&mut self, m: Material) {
         self.states.truncate(self.cursor + 1);
         self.states[self.cursor] = m;
+        self.generation += 1;
     }
 
     pub fn can_undo(&self) -> bool {
@@ -54,6 +63,7 @@ impl History {
         let ok = self.can_undo();
         if ok {
             self.cursor -= 1;
+            self.generation += 1;
         }
         ok
     }
@@ -63,6 +73,7 @@ impl History {
         let ok = self.can_redo();
         if ok {
             self.cursor += 1;
+            self.generation += 1;
         }
         ok
     }

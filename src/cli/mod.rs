@@ -124,6 +124,12 @@ enum Command {
         /// With --quit: first refine the mesh view to 1024 spp of the mis estimator.
         #[arg(long)]
         converge: bool,
+        /// After the replay and the drops, resize the window to each `WxH` in turn (scripted sessions).
+        #[arg(long, allow_hyphen_values = true)]
+        resize: Vec<String>,
+        /// After the resizes, minimise the window and restore it (scripted sessions).
+        #[arg(long)]
+        minimise: bool,
         /// Window size `WxH` (each side at most 8192).
         #[arg(long, default_value = "1280x720", allow_hyphen_values = true)]
         size: String,
@@ -245,9 +251,22 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             out,
             quit,
             converge,
+            resize,
+            minimise,
             size,
         }) => {
             let size = scene::parse_size(&size)?;
+            let resize = resize
+                .iter()
+                .map(|s| {
+                    scene::parse_size(s).map_err(|_| {
+                        brdf_shop::Error::input(
+                            "--resize",
+                            format!("expected WxH with positive integers, got \"{}\"", brdf_shop::fsio::quote(s)),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
             Ok(brdf_shop::editor::run(brdf_shop::editor::Options {
                 env,
                 mesh,
@@ -259,6 +278,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 out,
                 quit,
                 converge,
+                resize,
+                minimise,
                 size,
             })?)
         }

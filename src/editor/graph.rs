@@ -1,6 +1,7 @@
 //! The BRDF graph (paper Fig. 1, lower right): a polar plot of `f·cos θ_i` for the canvas light's
 //! incident direction, over outgoing directions in its plane of incidence — one colour per lobe plus
-//! the sum, linear or log scale — drawn on the CPU into the window's pixels.
+//! the sum, linear or log scale — drawn as egui shapes over the composed window (GPU triangles, no
+//! CPU pixels). The curves are computed once per material and light ([`Curves`]).
 
 use glam::DVec3;
 
@@ -9,76 +10,72 @@ use crate::brdf::Material;
 const COLOURS: [[u8; 3]; 6] =
     [[230, 120, 60], [90, 170, 230], [120, 200, 110], [200, 120, 210], [230, 200, 80], [110, 210, 200]];
 
-/// Draws into `rgba` (row stride `stride` pixels) the rectangle `(x0, y0, w, h)`.
-#[allow(clippy::too_many_arguments)]
-pub fn draw(
-    rgba: &mut [u8],
-    stride: usize,
-    (x0, y0, w, h): (usize, usize, usize, usize),
-    m: &Material,
-    light: DVec3,
-    log: bool,
-) {
-    if w < 8 || h < 8 {
-        return;
-    }
-    for y in y0..y0 + h {
-        for x in x0..x0 + w {
-            let k = 4 * (y * stride + x);
-            rgba[k..k + 4].copy_from_slice(&[24, 24, 28, 255]);
-        }
-    }
-    // The incident direction in the local frame of the canvas centre (n = +z): the light's elevation,
-    // in the plane φ = 0.
-    let theta_i = light.z.clamp(-1.0, 1.0).acos().min(89.0f64.to_radians());
-    let wi = DVec3::new(-theta_i.sin(), 0.0, theta_i.cos());
-    let n = 181;
-    let dirs: Vec<DVec3> = (0..n)
-        .map(|k| {
-            let t = (-90.0 + 180.0 * k as f64 / (n - 1) as f64).to_radians();
-            DVec3::new(t.sin(), 0.0, t.cos().max(1e-4)).normalize()
-        })
-        .collect();
-    let mut curves: Vec<(Vec<f64>, [u8; 3])> = Vec::new();
-    for (k, lobe) in m.lobes.iter().enumerate() {
-        let single = crate::brdf::Material { diffuse: [0.0; 3], lobes: vec![lobe.clone()], ..m.clone() };
-        curves.push((dirs.iter().map(|&wo| mean(single.eval(wi, wo)) * wi.z).collect(), COLOURS[k % COLOURS.len()]));
-    }
-    curves.push((dirs.iter().map(|&wo| mean(m.eval(wi, wo)) * wi.z).collect(), [240, 240, 240]));
-    let peak = curves.iter().flat_map(|c| c.0.iter()).fold(0.0f64, |a, &b| a.max(b)).max(1e-12);
-    let scale = |v: f64| if log { ((v / peak).max(1e-6).log10() + 6.0) / 6.0 } else { v / peak };
-    let (cx, cy) = (x0 as f64 + w as f64 / 2.0, (y0 + h) as f64 - 4.0);
-    let radius = (w as f64 / 2.0 - 4.0).min(h as f64 - 8.0);
-    let mut put = |x: f64, y: f64, c: [u8; 3]| {
-        let (xi, yi) = (x.round() as i64, y.round() as i64);
-        if xi >= x0 as i64 && xi < (x0 + w) as i64 && yi >= y0 as i64 && yi < (y0 + h) as i64 {
-            let k = 4 * (yi as usize * stride + xi as usize);
-            rgba[k..k + 3].copy_from_slice(&c);
-        }
-    };
-    // The horizon and the light's direction.
-    for k in 0..=200 {
-        let t = k as f64 / 200.0;
-        put(cx - radius + 2.0 * radius * t, cy, [70, 70, 80]);
-        put(cx + wi.x * radius * t, cy - wi.z * radius * t, [120, 110, 60]);
-    }
-    for (values, colour) in &curves {
-        let pts: Vec<(f64, f64)> = values
-            .iter()
-            .zip(&dirs)
-            .map(|(&v, d)| (cx + d.x * radius * scale(v), cy - d.z * radius * scale(v)))
+/// The plot's data: the light's incident direction, the outgoing directions and one curve per lobe
+/// plus the sum (values of `f·cos θ_i`, channel mean).
+pub struct Curves {
+    wi: DVec3,
+    dirs: Vec<DVec3>,
+    curves: Vec<(Vec<f64>, [u8; 3])>,
+    peak: f64,
+}
+
+impl Curves {
+    pub fn new(m: &Material, light: DVec3) -> Curves {
+        // The incident direction in the local frame of the canvas centre (n = +z): the light's
+        // elevation, in the plane φ = 0.
+        let theta_i = light.z.clamp(-1.0, 1.0).acos().min(89.0f64.to_radians());
+        let wi = DVec3::new(-theta_i.sin(), 0.0, theta_i.cos());
+        let n = 181;
+        let dirs: Vec<DVec3> = (0..n)
+            .map(|k| {
+                let t = (-90.0 + 180.0 * k as f64 / (n - 1) as f64).to_radians();
+                DVec3::new(t.sin(), 0.0, t.cos().max(1e-4)).normalize()
+            })
             .collect();
-        for seg in pts.windows(2) {
-            let ((ax, ay), (bx, by)) = (seg[0], seg[1]);
-            let steps = ((bx - ax).abs().max((by - ay).abs()) as usize).max(1);
-            for s in 0..=steps {
-                let t = s as f64 / steps as f64;
-                put(ax + (bx - ax) * t, ay + (by - ay) * t, *colour);
+        let mut curves: Vec<(Vec<f64>, [u8; 3])> = Vec::new();
+        for (k, lobe) in m.lobes.iter().enumerate() {
+            let single = crate::brdf::Material { diffuse: [0.0; 3], lobes: vec![lobe.clone()], ..m.clone() };
+            curves
+                .push((dirs.iter().map(|&wo| mean(single.eval(wi, wo)) * wi.z).collect(), COLOURS[k % COLOURS.len()]));
+        }
+        curves.push((dirs.iter().map(|&wo| mean(m.eval(wi, wo)) * wi.z).collect(), [240, 240, 240]));
+        let peak = curves.iter().flat_map(|c| c.0.iter()).fold(0.0f64, |a, &b| a.max(b)).max(1e-12);
+        let peak = if peak.is_finite() { peak } else { 1.0 };
+        Curves { wi, dirs, curves, peak }
+    }
+
+    /// Paints the plot into `rect` (window points) with `painter`: background, horizon, the light's
+    /// direction and the curves.
+    pub fn paint(&self, painter: &egui::Painter, rect: egui::Rect, log: bool) {
+        if rect.width() < 8.0 || rect.height() < 8.0 {
+            return;
+        }
+        let rgb = |c: [u8; 3]| egui::Color32::from_rgb(c[0], c[1], c[2]);
+        painter.rect_filled(rect, 0.0, rgb([24, 24, 28]));
+        let scale = |v: f64| {
+            let s = if log { ((v / self.peak).max(1e-6).log10() + 6.0) / 6.0 } else { v / self.peak };
+            if s.is_finite() {
+                s.clamp(0.0, 1.0)
+            } else {
+                0.0
             }
+        };
+        let (cx, cy) = (rect.center().x as f64, rect.bottom() as f64 - 4.0);
+        let radius = (rect.width() as f64 / 2.0 - 4.0).min(rect.height() as f64 - 8.0);
+        let at = |x: f64, y: f64| egui::pos2(x as f32, y as f32);
+        let thin = |c: [u8; 3]| egui::Stroke::new(1.0, rgb(c));
+        painter.line_segment([at(cx - radius, cy), at(cx + radius, cy)], thin([70, 70, 80]));
+        painter.line_segment([at(cx, cy), at(cx + self.wi.x * radius, cy - self.wi.z * radius)], thin([120, 110, 60]));
+        for (values, colour) in &self.curves {
+            let pts: Vec<egui::Pos2> = values
+                .iter()
+                .zip(&self.dirs)
+                .map(|(&v, d)| at(cx + d.x * radius * scale(v), cy - d.z * radius * scale(v)))
+                .collect();
+            painter.add(egui::Shape::line(pts, thin(*colour)));
         }
     }
 }
-
 fn mean(c: [f64; 3]) -> f64 {
     (c[0] + c[1] + c[2]) / 3.0
 }

@@ -27,6 +27,12 @@ pub struct Actions {
     pub redo: bool,
     pub save: bool,
     pub reset_light: bool,
+    /// Open the dialog: *Save as…* (`true`) or *Open…*.
+    pub open_dialog: Option<bool>,
+    /// A file picked in the *Open…* dialog (loaded like a dropped file).
+    pub open: Option<std::path::PathBuf>,
+    /// A path picked in the *Save as…* dialog.
+    pub save_as: Option<std::path::PathBuf>,
 }
 
 /// What the panel shows besides the material.
@@ -96,6 +102,14 @@ pub fn show(
                 out.redo = ui.button("redo").clicked();
                 out.save = ui.button("save").clicked();
                 out.reset_light = ui.button("reset light").clicked();
+            });
+            ui.horizontal(|ui| {
+                if ui.button("open…").clicked() {
+                    out.open_dialog = Some(false);
+                }
+                if ui.button("save as…").clicked() {
+                    out.open_dialog = Some(true);
+                }
             });
             ui.separator();
             // The model: the physically correct reciprocal one (default), or the paper's construction
@@ -200,4 +214,79 @@ pub fn show(
         out.material = Some((edited, ctx.is_using_pointer()));
     }
     out
+}
+
+/// The *Open…* / *Save as…* dialog: a path field (relative paths from the working directory) over a
+/// listing of its folder (sub-folders and the files the editor loads). A file that does not load or
+/// a path that cannot be written becomes the status line, as for a dropped file.
+pub struct Dialog {
+    pub save: bool,
+    pub path: String,
+}
+
+/// The extensions the *Open…* listing shows.
+const LOADABLE: [&str; 7] = ["exr", "hdr", "obj", "gltf", "glb", "ply", "json"];
+
+/// Shows the dialog while it is open (opened by `out.open_dialog`); a confirmed path goes into
+/// `out.open` or `out.save_as`.
+pub fn dialog(ctx: &egui::Context, dialog: &mut Option<Dialog>, out: &mut Actions) {
+    if let Some(save) = out.open_dialog.take() {
+        let path = if save { "material.brdf.json".to_string() } else { "./".to_string() };
+        *dialog = Some(Dialog { save, path });
+    }
+    let Some(d) = dialog.as_mut() else { return };
+    let mut close = false;
+    egui::Window::new(if d.save { "Save as…" } else { "Open…" }).collapsible(false).show(ctx, |ui| {
+        ui.text_edit_singleline(&mut d.path);
+        let typed = std::path::Path::new(&d.path);
+        let folder = if typed.is_dir() {
+            typed.to_path_buf()
+        } else {
+            typed.parent().filter(|p| !p.as_os_str().is_empty()).map_or_else(|| ".".into(), |p| p.to_path_buf())
+        };
+        let mut entries: Vec<(bool, std::path::PathBuf)> = std::fs::read_dir(&folder)
+            .map(|rd| {
+                rd.filter_map(|e| e.ok())
+                    .map(|e| (e.path().is_dir(), e.path()))
+                    .filter(|(dir, p)| {
+                        *dir || p
+                            .extension()
+                            .and_then(|x| x.to_str())
+                            .is_some_and(|x| LOADABLE.contains(&x.to_lowercase().as_str()))
+                    })
+                    .take(500)
+                    .collect()
+            })
+            .unwrap_or_default();
+        entries.sort();
+        egui::ScrollArea::vertical().max_height(240.0).show(ui, |ui| {
+            if ui.selectable_label(false, "../").clicked() {
+                d.path = format!("{}/", folder.join("..").display());
+            }
+            for (dir, p) in &entries {
+                let name = p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+                let label = if *dir { format!("{name}/") } else { name };
+                if ui.selectable_label(false, label).clicked() {
+                    d.path = if *dir { format!("{}/", p.display()) } else { p.display().to_string() };
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui.button(if d.save { "save" } else { "open" }).clicked() && !d.path.is_empty() {
+                let p = std::path::PathBuf::from(&d.path);
+                if d.save {
+                    out.save_as = Some(p);
+                } else {
+                    out.open = Some(p);
+                }
+                close = true;
+            }
+            if ui.button("cancel").clicked() {
+                close = true;
+            }
+        });
+    });
+    if close {
+        *dialog = None;
+    }
 }

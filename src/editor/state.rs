@@ -33,8 +33,17 @@ pub enum Input {
     ResetLight,
     FrameView,
     Save,
+    /// Save the material to this path (the *Save as…* dialog).
+    SaveAs(PathBuf),
     Resized(u32, u32),
+    /// A file dropped on the window or picked in the *Open…* dialog: environment, mesh or material.
     Dropped(PathBuf),
+    /// Linear or log scale of the BRDF graph (G).
+    ToggleLogGraph,
+    /// Exposure of both views ×1.25 (`true`, + or =) or ÷1.25 (−).
+    Exposure(bool),
+    /// Bring back the last session's unsaved material, when one was found (R).
+    Restore,
 }
 
 /// The tool panel's width (left edge of the window), when the window is wide enough for it.
@@ -90,6 +99,8 @@ pub struct Effect {
     pub redraw: bool,
     pub material_changed: bool,
     pub save: bool,
+    /// Save to this path instead of `--out`.
+    pub save_as: Option<PathBuf>,
     pub load: Option<PathBuf>,
     /// A stroke that could not be applied, for the status line.
     pub message: Option<String>,
@@ -127,6 +138,12 @@ pub struct State {
     cursor: (f64, f64),
     drag: Drag,
     pub status: String,
+    /// The BRDF graph's scale.
+    pub log_graph: bool,
+    /// The user's exposure factor on both views (the mesh view's auto exposure times this).
+    pub exposure: f64,
+    /// The last session's unsaved material, offered back until restored (R) or replaced.
+    pub recovered: Option<Material>,
 }
 
 impl State {
@@ -147,6 +164,9 @@ impl State {
             cursor: (0.0, 0.0),
             drag: Drag::None,
             status: String::new(),
+            log_graph: false,
+            exposure: 1.0,
+            recovered: None,
         }
     }
 
@@ -259,7 +279,24 @@ impl State {
                 self.layout = Layout::new(w.max(1), h.max(1));
                 fx.redraw = true;
             }
+            Input::SaveAs(p) => fx.save_as = Some(p),
             Input::Dropped(p) => fx.load = Some(p),
+            Input::ToggleLogGraph => {
+                self.log_graph = !self.log_graph;
+                fx.redraw = true;
+            }
+            Input::Exposure(up) => {
+                self.exposure = if up { self.exposure * 1.25 } else { self.exposure / 1.25 }.clamp(1e-4, 1e4);
+                fx.redraw = true;
+            }
+            Input::Restore => {
+                if let Some(m) = self.recovered.take() {
+                    self.history.push(m);
+                    self.status = "restored the last session's material".into();
+                    fx.material_changed = true;
+                    fx.redraw = true;
+                }
+            }
         }
         fx
     }

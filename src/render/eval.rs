@@ -57,13 +57,12 @@ impl EvalPass {
                 self.pipeline.bind(ctx, cmd, set, &(pairs.len() as u32).to_ne_bytes());
                 // SAFETY: `cmd` is recording with the compute pipeline bound.
                 unsafe { ctx.raw().cmd_dispatch(cmd, (n as u32).div_ceil(64), 1, 1) };
-                let b = [vk::MemoryBarrier2::default()
-                    .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-                    .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                    .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-                // SAFETY: `cmd` is recording.
-                unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&b)) };
+                crate::vk::barrier::memory(
+                    ctx,
+                    cmd,
+                    crate::vk::barrier::COMPUTE_WRITE,
+                    (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+                );
                 Ok(())
             })?;
             let floats: Vec<f32> =

@@ -38,7 +38,7 @@ impl GBufferPass {
         mesh: &GpuMesh,
         view_proj: &glam::Mat4,
     ) {
-        let none = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
+        let none = crate::vk::barrier::EARLIER_READS;
         let color = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
         let depth_access = (
             vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
@@ -52,7 +52,7 @@ impl GBufferPass {
             cmd,
             vk::ImageLayout::UNDEFINED,
             vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            none,
+            depth_access, // the previous frame's depth tests
             depth_access,
         );
         let clear = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };

@@ -5,11 +5,16 @@
 //! * canvas views: the canvas pass alone.
 //!
 //! Each pass lives in its own file with `new / record / destroy`; this module decides which run,
-//! owns the per-size targets and the per-environment and per-mesh GPU data (rebuilt only when they
-//! change), times every pass with timestamp queries, and reads the image back.
+//! owns each view's persistent targets and the per-environment and per-mesh GPU data (rebuilt only
+//! when they change), and records into the frames of a ring (`vk::frame`), timing every pass with
+//! timestamp queries. The editor records both views, the refinement's accumulation and the compose
+//! pass into one frame and never reads it back; the headless [`Renderer::render`] records one view,
+//! submits, waits and reads the image back.
 
+pub mod accumulate;
 pub mod background;
 pub mod canvas;
+pub mod compose;
 pub mod diffuse;
 pub mod environment;
 pub mod eval;
@@ -28,9 +33,10 @@ use crate::error::{Error, Result};
 use crate::reference::Image;
 use crate::scene::{Camera, Environment, Mesh};
 use crate::vk::descriptor::{self, Binding};
+use crate::vk::frame::{Finished, FrameRing};
 use crate::vk::pipeline::Pipeline;
-use crate::vk::query::{PassTime, Timestamps};
-use crate::vk::{readback, vk_err, Buffer, Context};
+use crate::vk::query::PassTime;
+use crate::vk::{barrier, readback, Buffer, Context};
 
 use environment::GpuEnvironment;
 use gpu::Push;
@@ -101,7 +107,7 @@ pub enum View {
 /// (README).
 pub const MAX_SPP: u32 = 1 << 16;
 
-/// The most pixels a GPU frame has: 8192×4096 (twice 8K UHD). Every pixel costs 48 bytes of render
+/// The most pixels a GPU frame has: 8192×4096 (twice 8K UHD). Every pixel costs 64 bytes of render
 /// targets, 16 of readback buffer and 16 of host image, so the largest frame needs about 2.7 GB
 /// (a frame of the device's largest image, 16384², would need 21 GB).
 pub const MAX_PIXELS: u64 = 8192 * 4096;
@@ -163,14 +169,7 @@ impl Recording<'_> {
         let (w, h) = (self.targets.width, self.targets.height);
         // SAFETY: `cmd` is recording with a compute pipeline bound.
         unsafe { self.ctx.raw().cmd_dispatch(self.cmd, w.div_ceil(8), h.div_ceil(8), 1) };
-        let b = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)];
-        let dep = vk::DependencyInfo::default().memory_barriers(&b);
-        // SAFETY: `cmd` is recording.
-        unsafe { self.ctx.raw().cmd_pipeline_barrier2(self.cmd, &dep) };
+        crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 }
 
@@ -182,6 +181,8 @@ struct Passes {
     mis: mis::MisPass,
     canvas: canvas::CanvasPass,
     eval: eval::EvalPass,
+    accumulate: accumulate::AccumulatePass,
+    compose: compose::ComposePass,
 }
 
 impl Passes {
@@ -194,6 +195,8 @@ impl Passes {
             mis: mis::MisPass::new(ctx)?,
             canvas: canvas::CanvasPass::new(ctx)?,
             eval: eval::EvalPass::new(ctx)?,
+            accumulate: accumulate::AccumulatePass::new(ctx)?,
+            compose: compose::ComposePass::new(ctx)?,
         })
     }
 
@@ -205,6 +208,8 @@ impl Passes {
         self.mis.destroy(ctx);
         self.canvas.destroy(ctx);
         self.eval.destroy(ctx);
+        self.accumulate.destroy(ctx);
+        self.compose.destroy(ctx);
     }
 }
 
@@ -212,16 +217,20 @@ impl Passes {
 pub struct Renderer {
     /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
     pub scalar_lobes: bool,
-    /// Where in its sequence the `mis` estimator starts: successive frames with offsets 0, N, 2N …
-    /// are independent parts of one long estimate (the editor's progressive refinement).
-    pub mis_offset: u32,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
     passes: Option<Passes>,
     env: Option<GpuEnvironment>,
     mesh: Option<GpuMesh>,
-    targets: Option<Targets>,
+    /// The persistent targets of each view (indexed by `View as usize`).
+    views: [Option<Targets>; 2],
+    /// `mis` samples summed in the mesh view's refinement, and in how many frames.
+    refined: u32,
+    refine_frames: u32,
+    /// The headless path's readback buffer (sized to its last image).
+    readback: Option<Buffer>,
+    ring: Option<FrameRing>,
     halton: Option<(u32, Buffer)>,
     sequence: Option<(u32, Buffer)>,
     pub ctx: Context,
@@ -243,14 +252,24 @@ fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
 impl Renderer {
     pub fn new(ctx: Context) -> Result<Renderer> {
         let passes = Passes::new(&ctx)?;
+        let ring = match FrameRing::new(&ctx) {
+            Ok(r) => r,
+            Err(e) => {
+                passes.destroy(&ctx);
+                return Err(e);
+            }
+        };
         Ok(Renderer {
             scalar_lobes: false,
-            mis_offset: 0,
             seed: 0,
             passes: Some(passes),
             env: None,
             mesh: None,
-            targets: None,
+            views: [None, None],
+            refined: 0,
+            refine_frames: 0,
+            readback: None,
+            ring: Some(ring),
             halton: None,
             sequence: None,
             ctx,
@@ -273,6 +292,7 @@ impl Renderer {
                 format!("{}x{} exceeds the device's largest image ({limit})", env.width, env.height),
             ));
         }
+        self.idle()?;
         if let Some(old) = self.env.take() {
             old.destroy(&self.ctx);
         }
@@ -285,6 +305,7 @@ impl Renderer {
         if self.mesh.as_ref().is_some_and(|m| m.key == mesh::key(mesh)) {
             return Ok(());
         }
+        self.idle()?;
         if let Some(old) = self.mesh.take() {
             old.destroy(&self.ctx);
         }
@@ -312,31 +333,28 @@ impl Renderer {
                 format!("{}x{} exceeds the device's largest image ({limit}x{limit})", s.width, s.height),
             ));
         }
-        // The editor's refinement adds frames of samples; their sum stays within the table's limit.
-        if self.mis_offset.saturating_add(s.spp) > MAX_SPP {
-            return Err(Error::input(
-                "--spp",
-                format!("{} samples after {} is more than the limit of {MAX_SPP}", s.spp, self.mis_offset),
-            ));
-        }
         Ok(())
     }
 
-    fn buffers_for(&mut self, spp: u32, estimator: Estimator) -> Result<()> {
+    /// The sample tables for `spp` samples per lobe, or `mis`'s sequence up to sample `end`
+    /// (replaced only after the frames in flight that read them).
+    fn buffers_for(&mut self, end: u32, spp: u32, estimator: Estimator) -> Result<()> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         if estimator == Estimator::Mis {
-            let spp = self.mis_offset.saturating_add(spp).next_power_of_two();
-            if self.sequence.as_ref().is_none_or(|s| s.0 < spp) {
+            let len = end.next_power_of_two();
+            if self.sequence.as_ref().is_none_or(|s| s.0 < len) {
+                self.idle()?;
                 if let Some((_, b)) = self.sequence.take() {
                     b.destroy(&self.ctx);
                 }
-                let seq = gpu::mis_sequence(spp);
+                let seq = gpu::mis_sequence(len);
                 self.sequence =
-                    Some((spp, Buffer::upload(&self.ctx, bytemuck::cast_slice(&seq), usage, "mis.sequence")?));
+                    Some((len, Buffer::upload(&self.ctx, bytemuck::cast_slice(&seq), usage, "mis.sequence")?));
             }
         }
         // The lobe passes bind the table (the `key` variant computes its points and ignores it).
         if estimator != Estimator::Mis && self.halton.as_ref().is_none_or(|s| s.0 != spp) {
+            self.idle()?;
             if let Some((_, b)) = self.halton.take() {
                 b.destroy(&self.ctx);
             }
@@ -353,19 +371,184 @@ impl Renderer {
         Ok(out)
     }
 
-    /// Renders one frame of `material` as `settings` say.
+    /// Renders one frame of `material` as `settings` say and reads it back: the headless path, on
+    /// the same frame ring as the editor's frames, waiting for its one frame.
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
+        self.begin_frame(material)?;
+        let recorded = self.record(material, settings, Progress::Fresh).and_then(|()| {
+            let (w, h) = (settings.width, settings.height);
+            if self.readback.as_ref().is_none_or(|b| b.size != w as u64 * h as u64 * 16) {
+                self.idle()?;
+                if let Some(b) = self.readback.take() {
+                    b.destroy(&self.ctx);
+                }
+                let targets = self.views[settings.view as usize].as_ref().expect("made by record");
+                self.readback = Some(readback::buffer_for(&self.ctx, &targets.accum)?);
+            }
+            let targets = self.views[settings.view as usize].as_ref().expect("made by record");
+            let cmd = self.ring.as_ref().expect("ring lives until drop").current_ref().cmd;
+            let buffer = self.readback.as_ref().expect("made above");
+            readback::record(&self.ctx, cmd, &targets.accum, vk::ImageLayout::GENERAL, buffer);
+            Ok(())
+        });
+        if let Err(e) = recorded {
+            let _ = self.ring.as_mut().expect("ring lives until drop").abandon(&self.ctx);
+            return Err(e);
+        }
+        self.submit_frame(None, None)?;
+        let timings = self.ring.as_mut().expect("ring lives until drop").wait(&self.ctx)?;
+        let pixels = readback::pixels(self.readback.as_ref().expect("made above"));
+        self.ctx.check_validation()?;
+        Ok(Frame { image: Image { width: settings.width, height: settings.height, pixels }, timings })
+    }
+
+    /// Reads the mesh view back as it is shown: the refinement's mean when refining, else its last
+    /// frame (waits for the frames in flight; one frame of its own).
+    pub fn read_mesh_view(&mut self) -> Result<Image> {
+        let Some(t) = self.views[View::Mesh as usize].as_ref() else {
+            return Err(Error::Validation("no mesh view was rendered".into()));
+        };
+        let (w, h) = (t.width, t.height);
+        self.idle()?;
+        if self.readback.as_ref().is_none_or(|b| b.size != w as u64 * h as u64 * 16) {
+            if let Some(b) = self.readback.take() {
+                b.destroy(&self.ctx);
+            }
+            let t = self.views[View::Mesh as usize].as_ref().expect("checked above");
+            self.readback = Some(readback::buffer_for(&self.ctx, &t.accum)?);
+        }
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        ring.begin(&self.ctx, 1, 1)?;
+        let t = self.views[View::Mesh as usize].as_ref().expect("checked above");
+        let image = if self.refined > 0 { &t.sum } else { &t.accum };
+        readback::record(
+            &self.ctx,
+            ring.current_ref().cmd,
+            image,
+            vk::ImageLayout::GENERAL,
+            self.readback.as_ref().expect("made above"),
+        );
+        ring.submit(&self.ctx, None, None)?;
+        ring.wait(&self.ctx)?;
+        let n = if self.refined > 0 { self.refine_frames.max(1) as f32 } else { 1.0 };
+        let pixels = readback::pixels(self.readback.as_ref().expect("made above"))
+            .into_iter()
+            .map(|p| p.map(|v| v / n))
+            .collect();
+        self.ctx.check_validation()?;
+        Ok(Image { width: w, height: h, pixels })
+    }
+
+    /// Waits for every frame in flight (before objects they use are replaced).
+    fn idle(&mut self) -> Result<()> {
+        if let Some(r) = self.ring.as_mut() {
+            r.wait_all(&self.ctx)?;
+        }
+        Ok(())
+    }
+
+    /// Starts a frame on the ring (waiting only for the frame that last used its slot) and writes
+    /// `material` into the frame's buffer. Returns the GPU times of that earlier frame, if not read.
+    pub fn begin_frame(&mut self, material: &Material) -> Result<Option<Finished>> {
+        let n = material.lobes.len() as u32;
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let finished = ring.begin(&self.ctx, 8 + n, 8 + n)?;
+        if let Err(e) = ring.current().upload(&self.ctx, "material", &gpu::material_bytes(material)) {
+            let _ = ring.abandon(&self.ctx);
+            return Err(e);
+        }
+        Ok(finished)
+    }
+
+    /// Submits the frame begun by [`Renderer::begin_frame`] (waiting on `wait` at its stage,
+    /// signalling `signal`); returns without waiting for the GPU.
+    pub fn submit_frame(
+        &mut self,
+        wait: Option<(vk::Semaphore, vk::PipelineStageFlags)>,
+        signal: Option<vk::Semaphore>,
+    ) -> Result<()> {
+        self.ring.as_mut().expect("ring lives until drop").submit(&self.ctx, wait, signal)
+    }
+
+    /// Ends the frame begun by [`Renderer::begin_frame`] without running it.
+    pub fn abandon_frame(&mut self) -> Result<()> {
+        self.ring.as_mut().expect("ring lives until drop").abandon(&self.ctx)
+    }
+
+    /// Waits for the frames in flight; their GPU times, oldest first.
+    pub fn finish_frames(&mut self) -> Result<Vec<Finished>> {
+        self.ring.as_mut().expect("ring lives until drop").wait_all(&self.ctx)
+    }
+
+    /// The command buffer and the acquire semaphore of the frame being recorded, for the caller's
+    /// own commands (the window's copy and the tool panel).
+    pub fn frame_commands(&self) -> (vk::CommandBuffer, vk::Semaphore) {
+        let f = self.ring.as_ref().expect("ring lives until drop").current_ref();
+        (f.cmd, f.acquired)
+    }
+
+    /// The number of the frame being recorded.
+    pub fn frame_number(&self) -> u64 {
+        self.ring.as_ref().expect("ring lives until drop").number()
+    }
+
+    /// Samples of `mis` summed in the mesh view's refinement (0: the view shows its last frame).
+    pub fn refined_samples(&self) -> u32 {
+        self.refined
+    }
+
+    /// Records, into the current frame, the composed window image `window`: the mesh view (the
+    /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
+    /// says (its `mesh_scale` is multiplied by 1 / frames here).
+    pub fn record_compose(&mut self, window: &crate::vk::Image, placement: &compose::Placement) -> Result<()> {
+        let (Some(mesh), Some(canvas)) =
+            (self.views[View::Mesh as usize].as_ref(), self.views[View::Canvas as usize].as_ref())
+        else {
+            return Err(Error::Validation("compose before both views were rendered".into()));
+        };
+        let (image, frames) = if self.refined > 0 { (&mesh.sum, self.refine_frames) } else { (&mesh.accum, 1) };
+        let p = compose::Placement { mesh_scale: placement.mesh_scale / frames.max(1) as f32, ..*placement };
+        let passes = self.passes.as_ref().expect("passes live until drop");
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let f = ring.current();
+        let (cmd, pool) = (f.cmd, f.pool);
+        f.timestamps.time(&self.ctx, cmd, "compose", || {
+            passes.compose.record(&self.ctx, cmd, pool, window, (image, &canvas.accum), &p)
+        })
+    }
+
+    /// Records one view of `material` into the current frame (begun by [`Renderer::begin_frame`]),
+    /// into that view's persistent targets. `Progress::Refine` adds `settings.spp` more `mis` samples
+    /// to the mesh view's running sum (continuing its sequence); `Fresh` restarts it.
+    pub fn record(&mut self, material: &Material, settings: &Settings, progress: Progress) -> Result<()> {
+        self.check_size(settings)?;
+        let refine = matches!(progress, Progress::Refine) && settings.view == View::Mesh;
+        if refine && settings.estimator != Estimator::Mis {
+            return Err(Error::Validation("refinement frames are mis frames".into()));
+        }
+        let offset = if refine { self.refined } else { 0 };
+        if refine && offset.saturating_add(settings.spp) > MAX_SPP {
+            return Err(Error::input(
+                "--spp",
+                format!("{} samples after {offset} is more than the limit of {MAX_SPP}", settings.spp),
+            ));
+        }
         let (w, h) = (settings.width, settings.height);
         let mesh_view = settings.view == View::Mesh;
         if mesh_view && (self.env.is_none() || self.mesh.is_none()) {
             return Err(Error::input("render", "a mesh view needs an environment and a mesh"));
         }
-        if self.targets.as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
-            if let Some(old) = self.targets.take() {
+        let slot = settings.view as usize;
+        if self.views[slot].as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
+            self.idle()?;
+            if let Some(old) = self.views[slot].take() {
                 old.destroy(&self.ctx);
             }
-            self.targets = Some(Targets::new(&self.ctx, w, h)?);
+            self.views[slot] = Some(Targets::new(&self.ctx, w, h)?);
+            if mesh_view {
+                self.refined = 0;
+            }
         }
         // Which lobes get a pass: non-zero albedo only.
         let prefilter = matches!(settings.estimator, Estimator::Fis | Estimator::Key);
@@ -389,141 +572,95 @@ impl Renderer {
             })
             .collect();
         if mesh_view {
-            self.buffers_for(settings.spp, settings.estimator)?;
+            self.buffers_for(offset.saturating_add(settings.spp), settings.spp, settings.estimator)?;
             if settings.estimator != Estimator::Mis {
                 let variants: Vec<_> = lobes.iter().map(|l| l.1).collect();
                 self.passes.as_mut().expect("passes live until drop").lobe.prepare(&self.ctx, &variants)?;
             }
         }
-
         let ctx = &self.ctx;
-        let material_buf =
-            Buffer::upload(ctx, &gpu::material_bytes(material), vk::BufferUsageFlags::STORAGE_BUFFER, "material")?;
-        let mut frame_objects =
-            FrameObjects { material: Some(material_buf), lights: None, readback: None, pool: None, timestamps: None };
-        let result = (|| -> Result<Frame> {
-            let targets = self.targets.as_ref().expect("made above");
-            frame_objects.readback = Some(readback::buffer_for(ctx, &targets.accum)?);
-            if let (true, Some(keys)) = (lights, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
-                let m = key_light_samples(settings.spp);
-                let samples = keys.frame_samples(m, self.seed);
-                let buffer = Buffer::upload(
-                    ctx,
-                    bytemuck::cast_slice(&samples),
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                    "keylights.frame",
-                )?;
-                let counts = [m as f32, keys.sampling.dark_samples(m) as f32];
-                frame_objects.lights = Some((buffer, samples.len() as u32, counts));
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let mut light_counts = None;
+        if let (true, true, Some(keys)) = (mesh_view, lights, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
+            let m = key_light_samples(settings.spp);
+            let samples = keys.frame_samples(m, self.seed);
+            ring.current().upload(ctx, "keylights.frame", bytemuck::cast_slice(&samples))?;
+            light_counts = Some((samples.len() as u32, [m as f32, keys.sampling.dark_samples(m) as f32]));
+        }
+        let frame = ring.current();
+        let (cmd, pool) = (frame.cmd, frame.pool);
+        let (ts, buffers) = frame.parts();
+        let material_buf = buffers.get("material").expect("written by begin_frame");
+        let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
+        let passes = self.passes.as_ref().expect("passes live until drop");
+        let targets = self.views[slot].as_ref().expect("made above");
+        let mut push = Push::default();
+        camera_push(&settings.camera, w, h, &mut push);
+        let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
+        push.size = [w, h, ew, eh];
+        push.light = gpu::vec4(settings.light, settings.intensity as f32);
+        let rec = Recording { ctx, cmd, pool, push, targets, env: self.env.as_ref() };
+        if !mesh_view {
+            return ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf));
+        }
+        let mesh = self.mesh.as_ref().expect("checked above");
+        let vp = settings.camera.view_proj(w, h);
+        ts.time(ctx, cmd, "gbuffer", || {
+            passes.gbuffer.record(ctx, cmd, targets, mesh, &vp);
+            Ok(())
+        })?;
+        ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
+        match settings.estimator {
+            Estimator::Mis => {
+                let seq = &self.sequence.as_ref().expect("made above").1;
+                ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, offset, settings.spp, material_buf, seq))?;
             }
-            frame_objects.pool = Some(descriptor::pool(ctx, 8 + lobes.len() as u32, "frame.descriptors")?);
-            frame_objects.timestamps = Some(Timestamps::new(ctx, 5 + lobes.len() as u32)?);
-            let passes = self.passes.as_ref().expect("passes live until drop");
-            let mut push = Push::default();
-            camera_push(&settings.camera, w, h, &mut push);
-            let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
-            push.size = [w, h, ew, eh];
-            push.light = gpu::vec4(settings.light, settings.intensity as f32);
-            let rec_base = Recording {
-                ctx,
-                cmd: ctx.commands.buffer,
-                pool: frame_objects.pool.expect("made above"),
-                push,
-                targets,
-                env: self.env.as_ref(),
-            };
-            let material_buf = frame_objects.material.as_ref().expect("made above");
-            let frame_objects_lights = frame_objects.lights.as_ref().map(|(b, n, c)| (b, *n, *c));
-            let readback_buf = frame_objects.readback.as_ref().expect("made above");
-            let ts = frame_objects.timestamps.as_mut().expect("made above");
-            ctx.commands.run(&ctx.device, |cmd| {
-                let rec = Recording { cmd, ..rec_base };
-                ts.reset(ctx, cmd);
-                if !mesh_view {
-                    ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf))?;
-                } else {
-                    let mesh = self.mesh.as_ref().expect("checked above");
-                    let vp = settings.camera.view_proj(w, h);
-                    ts.time(ctx, cmd, "gbuffer", || {
-                        passes.gbuffer.record(ctx, cmd, targets, mesh, &vp);
-                        Ok(())
-                    })?;
-                    ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
-                    match settings.estimator {
-                        Estimator::Mis => {
-                            let seq = &self.sequence.as_ref().expect("made above").1;
-                            ts.time(ctx, cmd, "mis", || {
-                                passes.mis.record(&rec, self.mis_offset, settings.spp, material_buf, seq)
-                            })?;
-                        }
-                        Estimator::Fis | Estimator::Plain | Estimator::Key => {
-                            if material.diffuse.iter().any(|&d| d != 0.0) {
-                                ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
-                            }
-                            let halton = &self.halton.as_ref().expect("made above").1;
-                            for &(i, v) in &lobes {
-                                let name = format!("lobe{i}[{}]", v.tag());
-                                ts.time(ctx, cmd, &name, || {
-                                    let job = lobe::Job {
-                                        index: i,
-                                        samples: settings.spp,
-                                        seed: self.seed,
-                                        material: material_buf,
-                                        halton,
-                                        light_samples: frame_objects_lights,
-                                    };
-                                    passes.lobe.record(&rec, v, &job)
-                                })?;
-                            }
-                        }
-                    }
+            Estimator::Fis | Estimator::Plain | Estimator::Key => {
+                if material.diffuse.iter().any(|&d| d != 0.0) {
+                    ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
                 }
-                readback::record(ctx, cmd, &targets.accum, vk::ImageLayout::GENERAL, readback_buf);
-                Ok(())
-            })?;
-            let timings = ts.read(ctx)?;
-            let pixels = readback::pixels(readback_buf);
-            Ok(Frame { image: Image { width: w, height: h, pixels }, timings })
-        })();
-        frame_objects.destroy(ctx);
-        let frame = result?;
-        ctx.check_validation()?;
-        Ok(frame)
+                let halton = &self.halton.as_ref().expect("made above").1;
+                for &(i, v) in &lobes {
+                    let name = format!("lobe{i}[{}]", v.tag());
+                    ts.time(ctx, cmd, &name, || {
+                        let job = lobe::Job {
+                            index: i,
+                            samples: settings.spp,
+                            seed: self.seed,
+                            material: material_buf,
+                            halton,
+                            light_samples,
+                        };
+                        passes.lobe.record(&rec, v, &job)
+                    })?;
+                }
+            }
+        }
+        if refine {
+            ts.time(ctx, cmd, "accumulate", || passes.accumulate.record(ctx, cmd, pool, targets, offset == 0))?;
+            self.refined = offset + settings.spp;
+            self.refine_frames = if offset == 0 { 1 } else { self.refine_frames + 1 };
+        } else {
+            self.refined = 0;
+        }
+        Ok(())
     }
 }
 
-/// The objects of one frame, destroyed after it whatever happened.
-struct FrameObjects {
-    material: Option<Buffer>,
-    /// The key lights' samples of this frame, how many, and the bright and dark sets' counts.
-    lights: Option<(Buffer, u32, [f32; 2])>,
-    readback: Option<Buffer>,
-    pool: Option<vk::DescriptorPool>,
-    timestamps: Option<Timestamps>,
-}
-
-impl FrameObjects {
-    fn destroy(self, ctx: &Context) {
-        // SAFETY: `Commands::run` waited for the submission (or nothing was submitted).
-        let _ = unsafe { ctx.raw().device_wait_idle() }.map_err(vk_err("vkDeviceWaitIdle"));
-        for b in [self.material, self.lights.map(|l| l.0)].into_iter().flatten() {
-            b.destroy(ctx);
-        }
-        if let Some(b) = self.readback {
-            b.destroy(ctx);
-        }
-        if let Some(p) = self.pool {
-            // SAFETY: no pending work uses the pool's sets.
-            unsafe { ctx.raw().destroy_descriptor_pool(p, None) };
-        }
-        if let Some(t) = self.timestamps {
-            t.destroy(ctx);
-        }
-    }
+/// How a mesh view frame relates to the ones before it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    /// A new image (the refinement restarts).
+    Fresh,
+    /// More `mis` samples added to the running sum.
+    Refine,
 }
 
 impl Drop for Renderer {
     fn drop(&mut self) {
+        if let Some(r) = self.ring.take() {
+            r.destroy(&self.ctx);
+        }
         // SAFETY: nothing else submits work; everything below is destroyed once.
         let _ = unsafe { self.ctx.raw().device_wait_idle() };
         if let Some(p) = self.passes.take() {
@@ -535,8 +672,11 @@ impl Drop for Renderer {
         if let Some(m) = self.mesh.take() {
             m.destroy(&self.ctx);
         }
-        if let Some(t) = self.targets.take() {
+        for t in self.views.iter_mut().filter_map(Option::take) {
             t.destroy(&self.ctx);
+        }
+        if let Some(b) = self.readback.take() {
+            b.destroy(&self.ctx);
         }
         for b in [self.halton.take(), self.sequence.take()].into_iter().flatten() {
             b.1.destroy(&self.ctx);

@@ -1,9 +1,10 @@
 //! The images a frame renders into, per image size: the G-buffer (world position with a coverage
-//! flag, world normal, depth) and the `RGBA32F` accumulation image the shading passes add into.
+//! flag, world normal, depth), the `RGBA32F` accumulation image the shading passes add into, and
+//! the running sum of progressive refinement. They persist from frame to frame (per view).
 
 use ash::vk;
 
-use crate::vk::{Context, Image};
+use crate::vk::{barrier, Context, Image};
 use crate::Result;
 
 pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -16,6 +17,8 @@ pub struct Targets {
     pub normal: Image,
     pub depth: Image,
     pub accum: Image,
+    /// The running sum of progressive refinement frames (see `accumulate`).
+    pub sum: Image,
 }
 
 impl Targets {
@@ -41,6 +44,14 @@ impl Targets {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
                 "accum",
             )?);
+            made.push(Image::new(
+                ctx,
+                (width, height),
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+                "refinement.sum",
+            )?);
             Ok(())
         })();
         if let Err(e) = built {
@@ -50,25 +61,25 @@ impl Targets {
             return Err(e);
         }
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("four images were made");
-        Ok(Targets { width, height, position: next(), normal: next(), depth: next(), accum: next() })
+        let mut next = || it.next().expect("five images were made");
+        Ok(Targets { width, height, position: next(), normal: next(), depth: next(), accum: next(), sum: next() })
     }
 
     /// Makes the accumulation image writable by the compute pass that starts a frame (its old
-    /// contents are dropped).
+    /// contents are dropped, after any earlier frame's reads).
     pub fn start_accum(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         self.accum.barrier(
             ctx,
             cmd,
             vk::ImageLayout::UNDEFINED,
             vk::ImageLayout::GENERAL,
-            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
-            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            barrier::EARLIER_READS,
+            barrier::COMPUTE_WRITE,
         );
     }
 
     pub fn destroy(self, ctx: &Context) {
-        for i in [self.position, self.normal, self.depth, self.accum] {
+        for i in [self.position, self.normal, self.depth, self.accum, self.sum] {
             i.destroy(ctx);
         }
     }

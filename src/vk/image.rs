@@ -101,10 +101,7 @@ impl Image {
         src: (vk::PipelineStageFlags2, vk::AccessFlags2),
         dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
     ) {
-        let b = [transition(self.raw, range(self.aspect, self.mip_levels), (from, to), src, dst)];
-        let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
-        // SAFETY: `cmd` is recording; the image is live.
-        unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &dep) };
+        super::barrier::image(ctx, cmd, self.raw, range(self.aspect, self.mip_levels), (from, to), src, dst);
     }
 
     /// Records copies of every level from `staging` (levels packed one after another, tightly) and
@@ -167,27 +164,6 @@ impl Image {
             let _ = a.free(self.allocation);
         }
     }
-}
-
-/// A layout transition of `range` of `image`, ordering `src` stages/accesses before `dst`.
-pub fn transition(
-    image: vk::Image,
-    range: vk::ImageSubresourceRange,
-    (from, to): (vk::ImageLayout, vk::ImageLayout),
-    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
-    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
-) -> vk::ImageMemoryBarrier2<'static> {
-    vk::ImageMemoryBarrier2::default()
-        .image(image)
-        .old_layout(from)
-        .new_layout(to)
-        .src_stage_mask(src.0)
-        .src_access_mask(src.1)
-        .dst_stage_mask(dst.0)
-        .dst_access_mask(dst.1)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .subresource_range(range)
 }
 
 pub fn range(aspect: vk::ImageAspectFlags, levels: u32) -> vk::ImageSubresourceRange {

@@ -4,10 +4,12 @@
 //! [`Context`] is the root: instance (with the validation messenger), logical device, memory
 //! allocator and the command pool. Drop order: wait idle → allocator → commands → device → instance.
 
+pub mod barrier;
 pub mod buffer;
 pub mod commands;
 pub mod descriptor;
 pub mod device;
+pub mod frame;
 pub mod image;
 pub mod instance;
 pub mod pipeline;

@@ -1,10 +1,10 @@
-//! Reading an `RGBA32F` image back to the host: copy into a host-visible buffer, barrier to
-//! `HOST_READ`, wait, then read the mapping.
+//! Reading an image back to the host: copy into a host-visible buffer, barrier to `HOST_READ`,
+//! wait, then read the mapping.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::{Buffer, Context, Image};
+use super::{barrier, Buffer, Context, Image};
 use crate::error::Result;
 
 /// A host-visible buffer sized for `image`'s level 0 (`RGBA32F`).
@@ -13,15 +13,14 @@ pub fn buffer_for(ctx: &Context, image: &Image) -> Result<Buffer> {
     Buffer::new(ctx, size, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, "readback")
 }
 
-/// Records the copy of `image` (in `layout`, written by `src`) into `buffer`, made visible to the host.
+/// Records the copy of `image` (in `layout`: `GENERAL` or `TRANSFER_SRC_OPTIMAL`, after any earlier
+/// writes) into `buffer`, made visible to the host. The image keeps its layout.
 pub fn record(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, layout: vk::ImageLayout, buffer: &Buffer) {
-    image.barrier(
+    barrier::memory(
         ctx,
         cmd,
-        layout,
-        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
         (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
-        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ),
+        barrier::TRANSFER_READ,
     );
     let region = vk::BufferImageCopy::default()
         .image_subresource(vk::ImageSubresourceLayers {
@@ -31,22 +30,9 @@ pub fn record(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, layout: vk::
             layer_count: 1,
         })
         .image_extent(vk::Extent3D { width: image.width, height: image.height, depth: 1 });
-    // SAFETY: `cmd` is recording; the buffer holds the whole level.
-    unsafe {
-        ctx.raw().cmd_copy_image_to_buffer(cmd, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
-    };
-    let b = [vk::BufferMemoryBarrier2::default()
-        .buffer(buffer.raw)
-        .size(vk::WHOLE_SIZE)
-        .src_stage_mask(vk::PipelineStageFlags2::COPY)
-        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-        .dst_access_mask(vk::AccessFlags2::HOST_READ)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)];
-    let dep = vk::DependencyInfo::default().buffer_memory_barriers(&b);
-    // SAFETY: `cmd` is recording.
-    unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &dep) };
+    // SAFETY: `cmd` is recording; the buffer holds the whole level; the image is in `layout`.
+    unsafe { ctx.raw().cmd_copy_image_to_buffer(cmd, image.raw, layout, buffer.raw, &[region]) };
+    barrier::to_host(ctx, cmd, buffer.raw);
 }
 
 /// The pixels of a buffer filled by [`record`], after the submission completed.

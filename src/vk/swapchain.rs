@@ -1,6 +1,7 @@
 //! The swapchain: created for the surface's current size (never zero: a minimised window has no
-//! swapchain), recreated when out of date. An image is acquired with a fence, filled by a copy the
-//! caller records, and presented after that submission completed.
+//! swapchain), recreated when out of date. An image is acquired with the frame's semaphore (no CPU
+//! wait); the frame's submission waits on it, writes the image (a copy, then the tool panel drawn
+//! into its view) and signals the image's own render-done semaphore, which the present waits on.
 
 use ash::vk;
 
@@ -12,9 +13,14 @@ pub struct Swapchain {
     loader: ash::khr::swapchain::Device,
     pub raw: vk::SwapchainKHR,
     pub images: Vec<vk::Image>,
+    /// One view per image (the tool panel renders into it).
+    pub views: Vec<vk::ImageView>,
+    /// One render-done semaphore per image: signalled by the frame that wrote it, waited by present.
+    pub rendered: Vec<vk::Semaphore>,
     pub extent: vk::Extent2D,
     pub format: vk::Format,
-    fence: vk::Fence,
+    /// The images can be copied from (a screenshot reads the presented pixels).
+    pub readable: bool,
 }
 
 /// What acquiring gave.
@@ -58,9 +64,12 @@ impl Swapchain {
             .or(formats.first())
             .copied()
             .ok_or_else(|| Error::NoDevice("the window surface offers no format".into()))?;
-        if !caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_DST) {
-            return Err(Error::NoDevice("the window surface cannot be written by copies".into()));
+        let needed = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        if !caps.supported_usage_flags.contains(needed) {
+            return Err(Error::NoDevice("the window surface cannot be written by copies and drawing".into()));
         }
+        let readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        let usage = if readable { needed | vk::ImageUsageFlags::TRANSFER_SRC } else { needed };
         let count =
             (caps.min_image_count + 1).min(if caps.max_image_count == 0 { u32::MAX } else { caps.max_image_count });
         let info = vk::SwapchainCreateInfoKHR::default()
@@ -70,7 +79,7 @@ impl Swapchain {
             .image_color_space(chosen.color_space)
             .image_extent(extent)
             .image_array_layers(1)
-            .image_usage(vk::ImageUsageFlags::TRANSFER_DST)
+            .image_usage(usage)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
             .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
@@ -88,79 +97,74 @@ impl Swapchain {
                 return Err(vk_err("vkGetSwapchainImagesKHR")(result));
             }
         };
-        // SAFETY: the device is live.
-        let fence = match unsafe { ctx.raw().create_fence(&vk::FenceCreateInfo::default(), None) } {
-            Ok(f) => f,
-            Err(result) => {
-                // SAFETY: unused.
-                unsafe { loader.destroy_swapchain(raw, None) };
-                return Err(vk_err("vkCreateFence")(result));
-            }
+        let mut sc = Swapchain {
+            loader,
+            raw,
+            images,
+            views: Vec::new(),
+            rendered: Vec::new(),
+            extent,
+            format: chosen.format,
+            readable,
         };
+        for (i, &image) in sc.images.iter().enumerate() {
+            let info = vk::ImageViewCreateInfo::default()
+                .image(image)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(sc.format)
+                .subresource_range(super::barrier::color());
+            // SAFETY: the image belongs to this swapchain; the view is destroyed in `destroy`.
+            let view = unsafe { ctx.raw().create_image_view(&info, None) };
+            // SAFETY: the device is live; the semaphore is destroyed in `destroy`.
+            let sem = unsafe { ctx.raw().create_semaphore(&vk::SemaphoreCreateInfo::default(), None) };
+            match (view, sem) {
+                (Ok(v), Ok(s)) => {
+                    ctx.device.set_name(s, &format!("swapchain.rendered{i}"));
+                    sc.views.push(v);
+                    sc.rendered.push(s);
+                }
+                (v, s) => {
+                    // SAFETY: unused.
+                    unsafe {
+                        if let Ok(v) = v {
+                            ctx.raw().destroy_image_view(v, None);
+                        }
+                        if let Ok(s) = s {
+                            ctx.raw().destroy_semaphore(s, None);
+                        }
+                    }
+                    let e = v.err().map(vk_err("vkCreateImageView")).or(s.err().map(vk_err("vkCreateSemaphore")));
+                    sc.destroy(ctx);
+                    return Err(e.expect("one of the two failed"));
+                }
+            }
+        }
         ctx.device.set_name(raw, "swapchain");
-        Ok(Some(Swapchain { loader, raw, images, extent, format: chosen.format, fence }))
+        Ok(Some(sc))
     }
 
-    /// Acquires an image and waits until it can be written.
-    pub fn acquire(&self, ctx: &Context) -> Result<Acquired> {
-        // SAFETY: the fence is unsignalled (reset after each wait); the swapchain is live.
-        let got = unsafe { self.loader.acquire_next_image(self.raw, u64::MAX, vk::Semaphore::null(), self.fence) };
+    /// Acquires an image; `signal` is signalled when it can be written (the frame's submission
+    /// waits on it). Does not wait.
+    pub fn acquire(&self, signal: vk::Semaphore) -> Result<Acquired> {
+        // SAFETY: the semaphore is unsignalled (its last signal was waited by the frame that used it,
+        // which completed before the frame slot was reused); the swapchain is live.
+        let got = unsafe { self.loader.acquire_next_image(self.raw, u64::MAX, signal, vk::Fence::null()) };
         match got {
-            Ok((index, _suboptimal)) => {
-                // SAFETY: the fence was handed to the acquire above.
-                unsafe {
-                    ctx.raw().wait_for_fences(&[self.fence], true, u64::MAX).map_err(vk_err("vkWaitForFences"))?;
-                    ctx.raw().reset_fences(&[self.fence]).map_err(vk_err("vkResetFences"))?;
-                }
-                Ok(Acquired::Image(index))
-            }
+            Ok((index, _suboptimal)) => Ok(Acquired::Image(index)),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
             Err(result) => Err(vk_err("vkAcquireNextImageKHR")(result)),
         }
     }
 
-    /// Lets `record` write image `index` (in `TRANSFER_DST_OPTIMAL`, by copies or blits) and
-    /// presents it; false when the swapchain turned out of date or suboptimal.
-    pub fn present(
-        &self,
-        ctx: &Context,
-        index: u32,
-        record: impl FnOnce(vk::CommandBuffer, vk::Image) -> Result<()>,
-    ) -> Result<bool> {
-        let image = self.images[index as usize];
-        let range = super::image::range(vk::ImageAspectFlags::COLOR, 1);
-        let copy = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
-        let none = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
-        ctx.commands.run(&ctx.device, |cmd| {
-            let before = [super::image::transition(
-                image,
-                range,
-                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
-                none,
-                copy,
-            )];
-            // SAFETY: `cmd` is recording; the image was acquired.
-            unsafe {
-                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&before))
-            };
-            record(cmd, image)?;
-            let after = [super::image::transition(
-                image,
-                range,
-                (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
-                copy,
-                none,
-            )];
-            // SAFETY: as above.
-            unsafe {
-                ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&after))
-            };
-            Ok(())
-        })?;
+    /// Presents image `index` once its `rendered` semaphore is signalled; false when the swapchain
+    /// turned out of date or suboptimal.
+    pub fn present(&self, ctx: &Context, index: u32) -> Result<bool> {
         let swapchains = [self.raw];
         let indices = [index];
-        let info = vk::PresentInfoKHR::default().swapchains(&swapchains).image_indices(&indices);
-        // SAFETY: the writes completed (`run` waited); the image is in PRESENT_SRC.
+        let waits = [self.rendered[index as usize]];
+        let info =
+            vk::PresentInfoKHR::default().swapchains(&swapchains).image_indices(&indices).wait_semaphores(&waits);
+        // SAFETY: the image was acquired and a submission that signals `waits` was made.
         match unsafe { self.loader.queue_present(ctx.device.queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
@@ -169,10 +173,16 @@ impl Swapchain {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: the device is idle with respect to the swapchain's images (presents are waited).
+        // SAFETY: the caller waited for the frames that used the images (the device is idle with
+        // respect to them); each object is destroyed once.
         unsafe {
             let _ = ctx.raw().device_wait_idle();
-            ctx.raw().destroy_fence(self.fence, None);
+            for &v in &self.views {
+                ctx.raw().destroy_image_view(v, None);
+            }
+            for &s in &self.rendered {
+                ctx.raw().destroy_semaphore(s, None);
+            }
             self.loader.destroy_swapchain(self.raw, None);
         }
     }

@@ -1,0 +1,17 @@
+#version 460
+// Progressive refinement on the GPU: adds this frame's estimate (the accumulation image) into the
+// running sum, or starts the sum with it. The mean is the sum over the number of frames (compose).
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D frame;
+layout(set = 0, binding = 1, rgba32f) uniform image2D sum;
+layout(push_constant) uniform Push {
+    uvec4 size;  // W, H, 1 to start the sum, 0 to add
+} pc;
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= int(pc.size.x) || p.y >= int(pc.size.y)) return;
+    vec4 v = imageLoad(frame, p);
+    if (pc.size.z == 0u) v += imageLoad(sum, p);
+    imageStore(sum, p, v);
+}

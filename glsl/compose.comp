@@ -1,0 +1,38 @@
+#version 460
+// The editor's window: the mesh view and the canvas placed side by side, each scaled by its exposure
+// and encoded as sRGB (the same curve as `imageio::srgb8`), the snap marker on the canvas, and the
+// window's grey everywhere else. The tool panel and the BRDF graph are drawn over it by egui.
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, rgba8) writeonly uniform image2D window;
+layout(set = 0, binding = 1, rgba32f) readonly uniform image2D mesh;
+layout(set = 0, binding = 2, rgba32f) readonly uniform image2D canvas;
+layout(push_constant) uniform Push {
+    uvec4 window_size;  // W, H, mesh view height, 1 to draw the marker
+    uvec4 views;        // mesh view x, width; canvas x, side
+    vec4 scale;         // mesh view scale (exposure / frames), canvas exposure, marker x, y (pixels)
+    vec4 background;    // window grey, 0..1 per channel
+} pc;
+
+vec3 srgb(vec3 v) {
+    vec3 x = clamp(v, 0.0, 1.0);
+    x = mix(x, vec3(0.0), isnan(x));
+    return mix(1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, 12.92 * x, lessThanEqual(x, vec3(0.0031308)));
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= int(pc.window_size.x) || p.y >= int(pc.window_size.y)) return;
+    vec3 c = pc.background.rgb;
+    int mx = int(pc.views.x), mw = int(pc.views.y), cx = int(pc.views.z), cs = int(pc.views.w);
+    if (p.x >= mx && p.x < mx + mw && p.y < int(pc.window_size.z)) {
+        c = srgb(imageLoad(mesh, ivec2(p.x - mx, p.y)).rgb * pc.scale.x);
+    } else if (p.x >= cx && p.x < cx + cs && p.y < cs) {
+        c = srgb(imageLoad(canvas, ivec2(p.x - cx, p.y)).rgb * pc.scale.y);
+        ivec2 m = ivec2(pc.scale.zw);
+        ivec2 d = abs(p - m);
+        if (pc.window_size.w == 1u && ((d.y == 0 && d.x <= 6) || (d.x == 0 && d.y <= 6))) {
+            c = vec3(255.0, 210.0, 60.0) / 255.0;
+        }
+    }
+    imageStore(window, p, vec4(c, 1.0));
+}

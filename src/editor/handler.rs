@@ -1,0 +1,166 @@
+//! The winit side: window events become [`Input`]s (every key included) handled by
+//! `State::handle` through `App::handle`; replayed inputs and the scripted window changes are fed
+//! between frames; idle windows refine the mesh view and otherwise sleep (no redraw is requested).
+
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::ActiveEventLoop;
+use winit::keyboard::{Key, ModifiersState};
+use winit::window::WindowId;
+
+use super::state::Input;
+use super::{App, WindowStep, REFINE_MAX};
+use crate::brush::BrushKind;
+
+/// The input a key press means, if any.
+pub fn key_input(key: &Key, mods: ModifiersState) -> Option<Input> {
+    let Key::Character(c) = key else { return None };
+    let c = c.to_lowercase();
+    let ctrl = mods.control_key();
+    Some(match (c.as_str(), ctrl) {
+        ("z", true) if mods.shift_key() => Input::Redo,
+        ("z", true) => Input::Undo,
+        ("y", true) => Input::Redo,
+        ("s", true) => Input::Save,
+        ("c", false) => Input::Brush(BrushKind::Create),
+        ("m", false) => Input::Brush(BrushKind::Modify),
+        ("s", false) => Input::Brush(BrushKind::Streak),
+        ("i", false) => Input::Brush(BrushKind::Intensify),
+        ("d", false) => Input::Brush(BrushKind::Deintensify),
+        ("p", false) => Input::ToggleSplit,
+        ("l", false) => Input::ResetLight,
+        ("f", false) => Input::FrameView,
+        ("g", false) => Input::ToggleLogGraph,
+        ("+" | "=", false) => Input::Exposure(true),
+        ("-", false) => Input::Exposure(false),
+        ("r", false) => Input::Restore,
+        _ => return None,
+    })
+}
+
+impl ApplicationHandler for App {
+    /// A report finished on the worker thread: show it.
+    fn user_event(&mut self, _el: &ActiveEventLoop, _event: ()) {
+        self.request_redraw();
+    }
+
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.gpu.is_none() {
+            if let Err(e) = self.init(el) {
+                self.fail(el, e);
+            }
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        // The tool panel sees every event first; what it takes does not reach the views.
+        if let (Some(es), Some(g)) = (self.egui_state.as_mut(), self.gpu.as_ref()) {
+            let r = es.on_window_event(&g.window, &event);
+            if r.repaint {
+                g.window.request_redraw();
+            }
+            let passes = matches!(
+                event,
+                WindowEvent::CloseRequested
+                    | WindowEvent::RedrawRequested
+                    | WindowEvent::Resized(_)
+                    | WindowEvent::ModifiersChanged(_)
+            );
+            if r.consumed && !passes {
+                return;
+            }
+        }
+        let input = match event {
+            WindowEvent::CloseRequested => {
+                self.done = true;
+                el.exit();
+                return;
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.draw() {
+                    self.fail(el, e);
+                }
+                return;
+            }
+            WindowEvent::Resized(s) => Input::Resized(s.width, s.height),
+            WindowEvent::ModifiersChanged(m) => {
+                self.modifiers = m.state();
+                return;
+            }
+            WindowEvent::CursorMoved { position, .. } => Input::CursorMoved(position.x, position.y),
+            WindowEvent::MouseInput { state, button, .. } => {
+                let pressed = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => Input::Button { pressed, right: false },
+                    MouseButton::Right => Input::Button { pressed, right: true },
+                    _ => return,
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => Input::Scroll(match delta {
+                MouseScrollDelta::LineDelta(_, y) => y as f64,
+                MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+            }),
+            WindowEvent::DroppedFile(p) => Input::Dropped(p),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                match key_input(&event.logical_key, self.modifiers) {
+                    Some(i) => i,
+                    None => return,
+                }
+            }
+            _ => return,
+        };
+        if let Err(e) = self.handle(input) {
+            self.fail(el, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_none() {
+            return;
+        }
+        // Replayed inputs go through the same handler, one stroke per turn of the loop.
+        if !self.pending.is_empty() {
+            while let Some(i) = self.pending.pop_front() {
+                let release = matches!(i, Input::Button { pressed: false, .. });
+                if let Err(e) = self.handle(i) {
+                    self.fail(el, e);
+                    return;
+                }
+                if release {
+                    break;
+                }
+            }
+            self.request_redraw();
+            return;
+        }
+        // Scripted window changes, one per turn, each after a frame was shown.
+        if self.shown {
+            if let (Some(step), Some(g)) = (self.window_script.pop_front(), self.gpu.as_ref()) {
+                match step {
+                    WindowStep::Resize(w, h) => {
+                        let _ = g.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                    }
+                    WindowStep::Minimise(yes) => g.window.set_minimized(yes),
+                }
+                self.request_redraw();
+                return;
+            }
+        }
+        // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast
+        // image); once refined, nothing is requested and the loop sleeps until the next event.
+        let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
+        if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX {
+            self.request_redraw();
+            return;
+        }
+        if self.opts.quit && self.shown {
+            // One frame after the last input (captured for `--screenshot`), then out.
+            self.done = true;
+            if let Err(e) = self.draw() {
+                self.fail(el, e);
+                return;
+            }
+            el.exit();
+        }
+    }
+}

@@ -1,0 +1,58 @@
+//! Frame statistics: per frame, wall ms, GPU ms per pass and whether it was an interaction frame
+//! (a change: the fast `key` image) or a refinement frame (more `mis` samples); `--frame-stats`
+//! writes them as JSON and the panel shows the median frame rate.
+
+/// What a frame rendered of the mesh view: the fast `key` image after a change (an interaction
+/// frame), `REFINE_STEP` more `mis` samples (a refinement frame), or nothing new.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameKind {
+    Interaction,
+    Refinement,
+    Unchanged,
+}
+
+/// One frame for `--frame-stats`.
+pub struct FrameStat {
+    pub wall_ms: f64,
+    pub gpu_ms: f64,
+    pub kind: FrameKind,
+    pub passes: Vec<(String, f64)>,
+}
+
+/// `{"device", "size": [W, H], "frames": [{"kind", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
+/// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
+/// "refinement": {…}, "views": …}` — `views` says where the last frame put the mesh view and the
+/// canvas and how (camera, exposure, light), so that a headless render can reproduce them.
+pub fn frame_stats_json(device: &str, size: (u32, u32), frames: &[FrameStat], views: serde_json::Value) -> String {
+    use serde_json::json;
+    let kind_name = |k: FrameKind| match k {
+        FrameKind::Interaction => "interaction",
+        FrameKind::Refinement => "refinement",
+        FrameKind::Unchanged => "unchanged",
+    };
+    let summary = |k: FrameKind| {
+        let wall: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.wall_ms).collect();
+        let gpu: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.gpu_ms).collect();
+        if wall.is_empty() {
+            return json!({ "frames": 0 });
+        }
+        let ratio: Vec<f64> =
+            frames.iter().filter(|f| f.kind == k && f.gpu_ms > 0.0).map(|f| f.wall_ms / f.gpu_ms).collect();
+        json!({ "frames": wall.len(), "median_wall_ms": crate::measure::stats(&wall).0,
+                "median_gpu_ms": crate::measure::stats(&gpu).0,
+                "median_wall_over_gpu": if ratio.is_empty() { 0.0 } else { crate::measure::stats(&ratio).0 } })
+    };
+    let list: Vec<_> = frames
+        .iter()
+        .map(|f| {
+            json!({ "kind": kind_name(f.kind), "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
+                    "passes": f.passes.iter().map(|(n, ms)| json!({ "name": n, "ms": ms })).collect::<Vec<_>>() })
+        })
+        .collect();
+    let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
+                      "interaction": summary(FrameKind::Interaction), "refinement": summary(FrameKind::Refinement),
+                      "views": views });
+    let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
+    s.push('\n');
+    s
+}

@@ -1,0 +1,356 @@
+//! The editor's GPU side: the window's surface and swapchain, the composed window image and the tool
+//! panel's painter. One frame records the views that changed into their persistent targets (the
+//! mesh view's refinement accumulates on the GPU), composes the window (`render::compose`), copies
+//! it into the acquired swapchain image, draws the panel straight into that image, submits and
+//! presents — without waiting for the GPU, which runs up to `FRAMES_IN_FLIGHT` frames behind.
+//! Nothing is read back unless a screenshot is asked for.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Window;
+
+use crate::brdf::Material;
+use crate::error::{Error, Result};
+use crate::render::compose::{Placement, WINDOW_FORMAT};
+use crate::render::{Progress, Renderer, Settings};
+use crate::vk::barrier;
+use crate::vk::frame::{Finished, FRAMES_IN_FLIGHT};
+use crate::vk::surface::{self, Surface};
+use crate::vk::swapchain::{Acquired, Swapchain};
+use crate::vk::{Buffer, Context, Image};
+
+/// What one frame draws.
+pub struct Plan<'a> {
+    pub material: &'a Material,
+    /// The mesh view to render, and whether it restarts or refines; `None`: it shows what it has.
+    pub mesh: Option<(Settings, Progress)>,
+    /// The canvas to render; `None`: unchanged.
+    pub canvas: Option<Settings>,
+    pub placement: Placement,
+    /// The tool panel: egui's texture changes, its triangles and its scale.
+    pub ui: (&'a egui::TexturesDelta, &'a [egui::ClippedPrimitive], f32),
+    /// Read the presented pixels back (`--screenshot`), waiting for the frame.
+    pub capture: bool,
+}
+
+/// What became of a frame.
+pub enum Shown {
+    /// Presented; the pixels when captured (`RGBA8`, the window's size).
+    Presented(Option<Vec<u8>>),
+    /// The swapchain no longer fits the window: nothing was drawn; ask for another frame.
+    OutOfDate,
+}
+
+pub struct Gpu {
+    /// The egui painter; dropped first (it owns device objects).
+    ui: Option<egui_ash_renderer::Renderer>,
+    /// The format the painter was made for (the swapchain's).
+    ui_format: vk::Format,
+    /// The composed views (`RGBA8`, the window's size).
+    window_image: Option<Image>,
+    pub swapchain: Option<Swapchain>,
+    surface: Option<Surface>,
+    /// Host-visible copy of a captured frame.
+    capture: Option<Buffer>,
+    /// Textures egui freed, with the number of the last frame that may draw them.
+    retired: VecDeque<(u64, Vec<egui::TextureId>)>,
+    pub renderer: Renderer,
+    pub window: Arc<Window>,
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        let _ = self.renderer.finish_frames();
+        drop(self.ui.take());
+        let ctx = &self.renderer.ctx;
+        if let Some(i) = self.window_image.take() {
+            i.destroy(ctx);
+        }
+        if let Some(b) = self.capture.take() {
+            b.destroy(ctx);
+        }
+        if let Some(s) = self.swapchain.take() {
+            s.destroy(ctx);
+        }
+        if let Some(s) = self.surface.take() {
+            s.destroy();
+        }
+    }
+}
+
+fn painter(ctx: &Context, format: vk::Format) -> Result<egui_ash_renderer::Renderer> {
+    egui_ash_renderer::Renderer::with_default_allocator(
+        &ctx.instance.raw,
+        ctx.device.physical,
+        ctx.device.raw.clone(),
+        egui_ash_renderer::DynamicRendering { color_attachment_format: format, depth_attachment_format: None },
+        egui_ash_renderer::Options {
+            srgb_framebuffer: false,
+            in_flight_frames: FRAMES_IN_FLIGHT,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| Error::NoDevice(format!("the tool panel's painter: {e}")))
+}
+
+impl Gpu {
+    /// Opens the window's device objects: the renderer (on a device that can present to `window`),
+    /// its surface, the swapchain and the panel's painter.
+    pub fn new(window: Arc<Window>, _el: &ActiveEventLoop) -> Result<Gpu> {
+        let display = window.display_handle().map_err(|e| Error::NoDevice(format!("no display handle: {e}")))?.as_raw();
+        let handle = window.window_handle().map_err(|e| Error::NoDevice(format!("no window handle: {e}")))?.as_raw();
+        let ctx = Context::from_env_with(&surface::required_extensions(display)?)?;
+        let renderer = Renderer::new(ctx)?;
+        let surface = Surface::new(&renderer.ctx, display, handle)?;
+        let mut gpu = Gpu {
+            ui: None,
+            ui_format: vk::Format::UNDEFINED,
+            window_image: None,
+            swapchain: None,
+            surface: Some(surface),
+            capture: None,
+            retired: VecDeque::new(),
+            renderer,
+            window,
+        };
+        gpu.swapchain_extent()?;
+        Ok(gpu)
+    }
+
+    /// The swapchain's size, made (or remade) for the window's size first; `None` while minimised.
+    pub fn swapchain_extent(&mut self) -> Result<Option<(u32, u32)>> {
+        if self.swapchain.is_none() {
+            let size = self.window.inner_size();
+            let surface = self.surface.as_ref().expect("lives until drop");
+            self.swapchain = Swapchain::new(&self.renderer.ctx, surface, (size.width, size.height))?;
+            if let Some(sc) = &self.swapchain {
+                if sc.format != self.ui_format {
+                    self.renderer.finish_frames()?;
+                    drop(self.ui.take());
+                    self.ui = Some(painter(&self.renderer.ctx, sc.format)?);
+                    self.ui_format = sc.format;
+                }
+            }
+        }
+        Ok(self.swapchain.as_ref().map(|s| (s.extent.width, s.extent.height)))
+    }
+
+    /// Drops the swapchain (out of date: the next frame makes one for the window's size).
+    fn drop_swapchain(&mut self) -> Result<()> {
+        self.renderer.finish_frames()?;
+        if let Some(old) = self.swapchain.take() {
+            old.destroy(&self.renderer.ctx);
+        }
+        Ok(())
+    }
+
+    /// Draws one frame as `plan` says (see the module). Returns what became of it and the GPU times
+    /// of an earlier frame that finished meanwhile.
+    pub fn frame(&mut self, plan: &Plan<'_>) -> Result<(Shown, Vec<Finished>)> {
+        let Some((w, h)) = self.swapchain_extent()? else { return Ok((Shown::OutOfDate, Vec::new())) };
+        if self.window_image.as_ref().is_none_or(|i| (i.width, i.height) != (w, h)) {
+            self.renderer.finish_frames()?;
+            if let Some(old) = self.window_image.take() {
+                old.destroy(&self.renderer.ctx);
+            }
+            let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+            self.window_image =
+                Some(Image::new(&self.renderer.ctx, (w, h), WINDOW_FORMAT, 1, usage, "window.composed")?);
+        }
+        let mut finished: Vec<Finished> = self.renderer.begin_frame(plan.material)?.into_iter().collect();
+        let number = self.renderer.frame_number();
+        // Textures freed before a frame FRAMES_IN_FLIGHT back are no longer drawn by any frame in flight.
+        while self.retired.front().is_some_and(|r| r.0 + (FRAMES_IN_FLIGHT as u64) < number) {
+            let (_, ids) = self.retired.pop_front().expect("checked");
+            if let Some(ui) = self.ui.as_mut() {
+                ui.free_textures(&ids).map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
+            }
+        }
+        let (_, acquired) = self.renderer.frame_commands();
+        let sc = self.swapchain.as_ref().expect("made above");
+        let index = match sc.acquire(acquired) {
+            Ok(Acquired::Image(i)) => i,
+            Ok(Acquired::OutOfDate) => {
+                self.renderer.abandon_frame()?;
+                self.drop_swapchain()?;
+                return Ok((Shown::OutOfDate, finished));
+            }
+            Err(e) => {
+                let _ = self.renderer.abandon_frame();
+                return Err(e);
+            }
+        };
+        match self.record(plan, index) {
+            Ok(()) => {}
+            Err(e) => {
+                let _ = self.renderer.abandon_frame();
+                return Err(e);
+            }
+        }
+        let sc = self.swapchain.as_ref().expect("made above");
+        let rendered = sc.rendered[index as usize];
+        self.renderer.submit_frame(Some((acquired, vk::PipelineStageFlags::ALL_COMMANDS)), Some(rendered))?;
+        let presented = sc.present(&self.renderer.ctx, index)?;
+        if !plan.ui.0.free.is_empty() {
+            self.retired.push_back((number, plan.ui.0.free.clone()));
+        }
+        let pixels = if plan.capture {
+            finished.extend(self.renderer.finish_frames()?);
+            let b = self.capture.as_ref().expect("made by record");
+            let bgr = matches!(sc.format, vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB);
+            let mut px = b.mapped()[..(w * h * 4) as usize].to_vec();
+            if bgr {
+                for p in px.chunks_exact_mut(4) {
+                    p.swap(0, 2);
+                }
+            }
+            Some(px)
+        } else {
+            None
+        };
+        self.renderer.ctx.check_validation()?;
+        if !presented {
+            self.drop_swapchain()?;
+        }
+        Ok((Shown::Presented(pixels), finished))
+    }
+
+    /// Records the frame's GPU work after the swapchain image `index` was acquired.
+    fn record(&mut self, plan: &Plan<'_>, index: u32) -> Result<()> {
+        if let Some((settings, progress)) = &plan.mesh {
+            self.renderer.record(plan.material, settings, *progress)?;
+        }
+        if let Some(settings) = &plan.canvas {
+            self.renderer.record(plan.material, settings, Progress::Fresh)?;
+        }
+        let window_image = self.window_image.as_ref().expect("made by frame");
+        self.renderer.record_compose(window_image, &plan.placement)?;
+        let ctx = &self.renderer.ctx;
+        let ui = self.ui.as_mut().expect("made with the swapchain");
+        ui.set_textures(ctx.device.queue, ctx.commands.pool, &plan.ui.0.set)
+            .map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
+        let sc = self.swapchain.as_ref().expect("made by frame");
+        let (w, h) = (sc.extent.width, sc.extent.height);
+        if plan.capture && self.capture.as_ref().is_none_or(|b| b.size != (w * h * 4) as u64) {
+            if !sc.readable {
+                return Err(Error::NoDevice("this window's images cannot be read back for a screenshot".into()));
+            }
+            if let Some(b) = self.capture.take() {
+                b.destroy(ctx);
+            }
+            let usage = vk::BufferUsageFlags::TRANSFER_DST;
+            self.capture =
+                Some(Buffer::new(ctx, (w * h * 4) as u64, usage, MemoryLocation::GpuToCpu, "window.capture")?);
+        }
+        let (cmd, _) = self.renderer.frame_commands();
+        let image = sc.images[index as usize];
+        let range = barrier::color();
+        let raw = ctx.raw();
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let corner = [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
+        let blit = vk::ImageBlit::default()
+            .src_subresource(layers)
+            .src_offsets(corner)
+            .dst_subresource(layers)
+            .dst_offsets(corner);
+        let layouts = |a, b| (a, b);
+        barrier::image(
+            ctx,
+            cmd,
+            image,
+            range,
+            layouts(vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+            (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::NONE),
+            barrier::TRANSFER_WRITE,
+        );
+        // SAFETY: `cmd` is recording; the composed image (GENERAL, its writes ordered before transfer
+        // reads by the compose pass) and the acquired swapchain image (TRANSFER_DST) have this size.
+        unsafe {
+            raw.cmd_blit_image(
+                cmd,
+                window_image.raw,
+                vk::ImageLayout::GENERAL,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[blit],
+                vk::Filter::NEAREST,
+            )
+        };
+        barrier::image(
+            ctx,
+            cmd,
+            image,
+            range,
+            layouts(vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
+            barrier::TRANSFER_WRITE,
+            barrier::COLOR_ATTACHMENT,
+        );
+        let attachment = [vk::RenderingAttachmentInfo::default()
+            .image_view(sc.views[index as usize])
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::LOAD)
+            .store_op(vk::AttachmentStoreOp::STORE)];
+        let extent = sc.extent;
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&attachment);
+        // SAFETY: the swapchain image is a colour attachment in the layout named.
+        unsafe { raw.cmd_begin_rendering(cmd, &info) };
+        let drawn =
+            ui.cmd_draw(cmd, extent, plan.ui.2, plan.ui.1).map_err(|e| Error::NoDevice(format!("the tool panel: {e}")));
+        // SAFETY: rendering began above.
+        unsafe { raw.cmd_end_rendering(cmd) };
+        drawn?;
+        let present = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
+        if let (true, Some(buffer)) = (plan.capture, self.capture.as_ref()) {
+            barrier::image(
+                ctx,
+                cmd,
+                image,
+                range,
+                layouts(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+                barrier::COLOR_ATTACHMENT,
+                barrier::TRANSFER_READ,
+            );
+            let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            });
+            // SAFETY: `cmd` is recording; the buffer holds the whole image, which is in TRANSFER_SRC.
+            unsafe {
+                raw.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+            };
+            barrier::to_host(ctx, cmd, buffer.raw);
+            barrier::image(
+                ctx,
+                cmd,
+                image,
+                range,
+                layouts(vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                barrier::TRANSFER_READ,
+                present,
+            );
+        } else {
+            barrier::image(
+                ctx,
+                cmd,
+                image,
+                range,
+                layouts(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                barrier::COLOR_ATTACHMENT,
+                present,
+            );
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,70 @@
+//! Progressive refinement on the GPU: each refinement frame's estimate (the accumulation image) is
+//! added into the mesh view's running sum (`Targets::sum`); the compose pass shows sum / frames.
+//! Nothing goes through the host.
+
+use ash::vk;
+
+use super::targets::Targets;
+use crate::vk::descriptor::{self, Binding};
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{barrier, Context};
+use crate::Result;
+
+const BINDINGS: [vk::DescriptorType; 2] = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
+
+pub struct AccumulatePass {
+    pipeline: Pipeline,
+}
+
+impl AccumulatePass {
+    pub fn new(ctx: &Context) -> Result<AccumulatePass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("accumulate.comp"), "accumulate", &BINDINGS, 16, &[])?;
+        Ok(AccumulatePass { pipeline })
+    }
+
+    /// Adds `targets.accum` into `targets.sum` (`first`: starts the sum instead). The sum stays in
+    /// `GENERAL`, its writes ordered before later compute and transfer reads.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        pool: vk::DescriptorPool,
+        targets: &Targets,
+        first: bool,
+    ) -> Result<()> {
+        if first {
+            targets.sum.barrier(
+                ctx,
+                cmd,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::GENERAL,
+                barrier::EARLIER_READS,
+                barrier::COMPUTE_READ_WRITE,
+            );
+        }
+        let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
+        descriptor::write(
+            ctx,
+            set,
+            &[Binding::StorageImage(targets.accum.view), Binding::StorageImage(targets.sum.view)],
+        );
+        let push = [targets.width, targets.height, first as u32, 0];
+        self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
+        // SAFETY: `cmd` is recording with the compute pipeline bound.
+        unsafe { ctx.raw().cmd_dispatch(cmd, targets.width.div_ceil(8), targets.height.div_ceil(8), 1) };
+        barrier::memory(
+            ctx,
+            cmd,
+            barrier::COMPUTE_WRITE,
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}
