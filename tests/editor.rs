@@ -127,20 +127,28 @@ fn idle_frames_refine_the_mesh_view() {
     assert!(!stderr.contains("panicked"), "a thread panicked: {stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(spread(&img, (0, 0, 128, 144)) > 2.0, "the mesh view is empty");
-    // --frame-stats: one interaction frame (the first), then 1024 / 16 = 64 refinement frames, each
-    // with its wall time at least its GPU time (the frame waits for its passes) and its passes named.
+    // --frame-stats: one interaction frame (the first: mesh view, canvas, compose), then 1024 / 16 =
+    // 64 refinement frames, each adding `mis` samples on the GPU (mis, accumulate, compose) without
+    // re-rendering the canvas (nothing changed it), each with its GPU time and its passes named.
     let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let frames = doc["frames"].as_array().unwrap();
     let kind = |k: &str| frames.iter().filter(|f| f["kind"] == k).count();
     assert_eq!((kind("interaction"), kind("refinement")), (1, 64), "{doc}");
     for f in frames {
         let (wall, gpu) = (f["wall_ms"].as_f64().unwrap(), f["gpu_ms"].as_f64().unwrap());
-        assert!(gpu > 0.0 && wall >= gpu, "{f}");
+        assert!(gpu > 0.0 && wall > 0.0, "{f}");
         let passes = f["passes"].as_array().unwrap();
-        assert!(passes.iter().any(|p| p["name"] == "canvas"), "{f}");
+        let has = |n: &str| passes.iter().any(|p| p["name"] == n);
+        assert!(has("compose"), "{f}");
+        if f["kind"] == "refinement" {
+            assert!(has("mis") && has("accumulate") && !has("canvas"), "{f}");
+        } else {
+            assert!(has("canvas") && has("gbuffer"), "{f}");
+        }
         let sum: f64 = passes.iter().map(|p| p["ms"].as_f64().unwrap()).sum();
         assert!((sum - gpu).abs() <= 1e-9 * gpu, "{f}");
     }
+    assert_eq!(doc["views"]["mesh"]["refined_spp"], 1024);
     assert_eq!(doc["size"], serde_json::json!([256, 144]));
     assert_eq!(doc["refinement"]["frames"], 64);
 }
@@ -358,4 +366,141 @@ fn a_window_larger_than_the_display_is_clamped() {
     );
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(img.width() <= 640 && img.height() <= 480, "{:?}", img.dimensions());
+}
+
+/// The window shows what the headless renderer renders (issue 11): the screenshot's mesh view and
+/// canvas equal `render` of the same views — size, camera, exposure and canvas light read from
+/// `--frame-stats`'s `views` — within 1 level of 255 per channel. Both run the same passes with the
+/// same frame seed; what may differ is the sRGB encoding (the compose pass in f32 and the PNG writer
+/// in f64 can round a value within f32 error of a half level differently: one level). The snap
+/// marker's pixels (its colour exactly) are left out of the canvas.
+#[test]
+fn screenshot_equals_the_headless_render_of_the_same_views() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let map = root.join("assets/hdri/studio.exr");
+    let bin = env!("CARGO_BIN_EXE_brdf-shop");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x720x24", bin, "edit", "--env"])
+        .arg(&map)
+        .arg("--replay")
+        .arg(root.join("assets/default.strokes.json"))
+        .arg("--screenshot")
+        .arg(d("shot.png"))
+        .arg("--out")
+        .arg(d("m.brdf.json"))
+        .arg("--frame-stats")
+        .arg(d("stats.json"))
+        .args(["--quit", "--size", "960x540"])
+        .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run (tools/setup installs xvfb)");
+    assert!(run.status.success(), "editor failed: {}", String::from_utf8_lossy(&run.stderr));
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d("stats.json")).unwrap()).unwrap();
+    let (mesh, canvas) = (&doc["views"]["mesh"], &doc["views"]["canvas"]);
+    let n = |v: &serde_json::Value| v.as_u64().unwrap() as u32;
+    let (mx, mw, mh) = (n(&mesh["x"]), n(&mesh["width"]), n(&mesh["height"]));
+    let (cx, side) = (n(&canvas["x"]), n(&canvas["side"]));
+    let render = |out: &Path, args: &[String]| {
+        let r = Command::new(bin)
+            .args(["render", "--material"])
+            .arg(d("m.brdf.json"))
+            .args(args)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "render failed: {}", String::from_utf8_lossy(&r.stderr));
+        image::open(out).unwrap().to_rgb8()
+    };
+    let mesh_img = render(
+        &d("mesh.png"),
+        &[
+            "--env".into(),
+            map.display().to_string(),
+            "--mesh".into(),
+            "torus".into(),
+            "--size".into(),
+            format!("{mw}x{mh}"),
+            "--spp".into(),
+            mesh["spp"].to_string(),
+            "--camera".into(),
+            mesh["camera"].as_str().unwrap().into(),
+            "--exposure".into(),
+            mesh["exposure"].to_string(),
+        ],
+    );
+    let canvas_img = render(
+        &d("canvas.png"),
+        &[
+            "--view".into(),
+            "canvas".into(),
+            "--size".into(),
+            format!("{side}x{side}"),
+            "--light".into(),
+            canvas["light"].as_str().unwrap().into(),
+            "--exposure".into(),
+            canvas["exposure"].to_string(),
+        ],
+    );
+    let shot = image::open(d("shot.png")).unwrap().to_rgba8();
+    let mut worst = [0i32; 2];
+    let mut compared = [0usize; 2];
+    for (k, (img, x0, w, h)) in [(&mesh_img, mx, mw, mh), (&canvas_img, cx, side, side)].into_iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                let s = shot.get_pixel(x0 + x, y);
+                if k == 1 && [s[0], s[1], s[2]] == [255, 210, 60] {
+                    continue;
+                }
+                let r = img.get_pixel(x, y);
+                let diff = (0..3).map(|c| (s[c] as i32 - r[c] as i32).abs()).max().unwrap();
+                worst[k] = worst[k].max(diff);
+                compared[k] += 1;
+            }
+        }
+    }
+    assert!(compared[0] == (mw * mh) as usize && compared[1] > (side * side) as usize * 9 / 10, "{compared:?}");
+    assert!(worst[0] <= 1 && worst[1] <= 1, "largest difference (mesh view, canvas): {worst:?} levels");
+}
+
+/// A whole scripted session under the validation layer (debug builds turn it on, and a validation
+/// error ends the editor with an error): paint the default strokes, drop a good map, a broken map, a
+/// good mesh and a cut material (the broken ones are status lines), resize the window twice,
+/// minimise and restore it, then refine the mesh view to 1024 spp. The session ends cleanly, the
+/// last frame has the last size, and the refinement reached 1024 spp.
+#[test]
+fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validation_errors() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    std::fs::write(d("broken.exr"), b"not an exr").unwrap();
+    std::fs::write(d("cut.brdf.json"), b"{\"format\": \"brdf-shop/material\", \"vers").unwrap();
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--replay"])
+        .arg(assets.join("default.strokes.json"))
+        .arg("--drop")
+        .arg(assets.join("hdri/venice.exr"))
+        .arg("--drop")
+        .arg(d("broken.exr"))
+        .arg("--drop")
+        .arg(assets.join("meshes/bunny.obj"))
+        .arg("--drop")
+        .arg(d("cut.brdf.json"))
+        .args(["--resize", "400x300", "--resize", "360x200", "--minimise", "--quit", "--converge"])
+        .args(["--size", "320x240", "--frame-stats"])
+        .arg(d("stats.json"))
+        .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run (tools/setup installs xvfb)");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "editor ended: {stderr}");
+    assert!(!stderr.contains("panicked") && !stderr.contains("alidation"), "{stderr}");
+    assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
+    assert_eq!(stderr.lines().filter(|l| l.contains("not loaded")).count(), 2, "{stderr}");
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d("stats.json")).unwrap()).unwrap();
+    assert_eq!(doc["size"], serde_json::json!([360, 200]), "{}", doc["size"]);
+    assert_eq!(doc["views"]["mesh"]["refined_spp"], 1024);
+    assert!(doc["refinement"]["frames"].as_u64().unwrap() >= 64, "{}", doc["refinement"]);
 }

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use anyhow::Context as _;
-use brdf_shop::measure::{bench, error_vs_time, stability};
+use brdf_shop::measure::{bench, error_vs_time, stability, viewer};
 use brdf_shop::render::Renderer;
 use brdf_shop::vk::Context;
 
@@ -33,9 +33,17 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     brdf_shop::interrupt::install();
     let rows = unless_interrupted(bench::run(&mut r, &plan, true))?;
     print!("{}", bench::table(&rows, r.device_name()));
+    let materials = vec![
+        ("default".to_string(), brdf_shop::brush::strokes::default_material()?),
+        ("8 lobes".to_string(), bench::material(8)),
+    ];
+    let frames = if quick { 4 } else { 20 };
+    let viewer = unless_interrupted(viewer::run(&mut r, &plan.viewer_sizes, &materials, frames))?;
+    print!("{}", viewer::table(&viewer, r.device_name()));
     if let Some(path) = json {
-        let text =
-            serde_json::to_string_pretty(&bench::json(&rows, r.device_name(), &plan)).context("encoding JSON")? + "\n";
+        let mut doc = bench::json(&rows, r.device_name(), &plan);
+        doc["viewer"] = viewer::json(&viewer);
+        let text = serde_json::to_string_pretty(&doc).context("encoding JSON")? + "\n";
         brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
         println!("wrote {}", path.display());
     }

@@ -82,7 +82,15 @@ impl ApplicationHandler for App {
                 }
                 return;
             }
-            WindowEvent::Resized(s) => Input::Resized(s.width, s.height),
+            WindowEvent::Resized(s) => {
+                if let Some(g) = self.gpu.as_mut() {
+                    if let Err(e) = g.resized((s.width, s.height)) {
+                        self.fail(el, e);
+                        return;
+                    }
+                }
+                Input::Resized(s.width, s.height)
+            }
             WindowEvent::ModifiersChanged(m) => {
                 self.modifiers = m.state();
                 return;

@@ -13,6 +13,8 @@
 
 pub mod graph;
 pub mod handler;
+pub mod lighting;
+pub mod options;
 pub mod panel;
 pub mod recovery;
 pub mod report;
@@ -42,64 +44,8 @@ use state::{Input, Layout, State};
 use stats::{FrameKind, FrameStat};
 use view::{Gpu, Plan, Shown};
 
-/// What `brdf-shop edit` was asked to do.
-#[derive(Clone, Debug, Default)]
-pub struct Options {
-    pub env: Option<PathBuf>,
-    pub mesh: Option<String>,
-    pub material: Option<PathBuf>,
-    pub replay: Option<PathBuf>,
-    /// Scripted drops: after the replay, these files are dropped onto the window in order.
-    pub drop: Vec<PathBuf>,
-    /// Write per-frame statistics (wall ms, GPU ms per pass, interaction or refinement) here on exit.
-    pub frame_stats: Option<PathBuf>,
-    pub screenshot: Option<PathBuf>,
-    pub out: Option<PathBuf>,
-    pub quit: bool,
-    /// With `quit`: refine the mesh view to REFINE_MAX samples before leaving.
-    pub converge: bool,
-    /// Scripted window changes after the replay and the drops: each size in turn, then (with
-    /// `minimise`) minimise and restore — each takes effect before the next.
-    pub resize: Vec<(u32, u32)>,
-    pub minimise: bool,
-    pub size: (u32, u32),
-}
-
-/// The longest side of the editor's window (pixels), checked before a window is made: an 8K
-/// display is 7680 wide, X11 cannot make a window of 65536 (winit panics on it), and the frame is
-/// composed on the GPU at 4 bytes a pixel plus the views' targets, so 8192² stays near 2 GB.
-pub const MAX_WINDOW_SIDE: u32 = 8192;
-
-/// Each side of a requested window size, limited to the display's.
-pub fn clamp_to_display(size: (u32, u32), display: (u32, u32)) -> (u32, u32) {
-    (size.0.min(display.0).max(1), size.1.min(display.1).max(1))
-}
-
-/// Refuses (naming `--size`) a window size of a zero side or a side over [`MAX_WINDOW_SIDE`].
-pub fn check_size(size: (u32, u32)) -> Result<()> {
-    let (w, h) = size;
-    if w == 0 || h == 0 || w > MAX_WINDOW_SIDE || h > MAX_WINDOW_SIDE {
-        return Err(Error::input(
-            "--size",
-            format!("{w}x{h}: each side of the window must be within 1 and {MAX_WINDOW_SIDE} pixels"),
-        ));
-    }
-    Ok(())
-}
-
-/// What the editor needs of the environment beyond its texels, computed once per map (not per frame).
-struct EnvSummary {
-    /// `Environment::brightest_direction`, where the canvas light starts.
-    brightest: DVec3,
-    /// [`auto_exposure`]'s scale of the mesh view.
-    exposure: f64,
-}
-
-impl EnvSummary {
-    fn of(env: &Environment) -> EnvSummary {
-        EnvSummary { brightest: env.brightest_direction(), exposure: auto_exposure(env) }
-    }
-}
+use lighting::{light_from, EnvSummary};
+pub use options::{check_size, clamp_to_display, Options, MAX_WINDOW_SIDE};
 
 /// What the mesh view was last rendered for: any change restarts it (an interaction frame).
 #[derive(Clone, Debug, PartialEq)]
@@ -180,31 +126,6 @@ pub const REFINE_MAX: u32 = 1024;
 
 /// How many recent frames the panel's median frame time is taken over.
 pub const FRAME_RATE_WINDOW: usize = 30;
-
-/// The canvas light the editor starts with: the environment's brightest direction seen from the
-/// camera (canvas x = right, y = up, z = towards the viewer).
-fn light_from(env: &EnvSummary, state_camera: &crate::scene::Camera) -> DVec3 {
-    let d = env.brightest;
-    let (right, up, forward) = state_camera.basis();
-    DVec3::new(d.dot(right), d.dot(up), -d.dot(forward)).normalize()
-}
-
-/// Scales the mesh view so the environment's mean radiance shows as mid grey.
-fn auto_exposure(env: &Environment) -> f64 {
-    let (mut s, mut w) = (0.0, 0.0);
-    for j in 0..env.height {
-        let o = env.texel_solid_angle(j);
-        for t in &env.texels[j * env.width..(j + 1) * env.width] {
-            s += (t[0] + t[1] + t[2]).max(0.0) as f64 / 3.0 * o;
-            w += o;
-        }
-    }
-    if s > 0.0 {
-        (0.18 * w / s).clamp(1e-4, 1e4)
-    } else {
-        1.0
-    }
-}
 
 impl App {
     fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
@@ -370,8 +291,10 @@ impl App {
         let Some(kind) = kind else { return Ok(()) };
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         self.frame_ms.push(wall_ms);
-        if let Some(g) = &self.gpu {
+        if let Some(g) = self.gpu.as_mut() {
             self.in_flight.push((g.renderer.frame_number(), wall_ms, kind));
+            let finished = g.renderer.take_finished();
+            self.file_finished(finished);
         }
         Ok(())
     }
@@ -526,7 +449,7 @@ impl App {
             ui: (&output.textures_delta, &primitives, output.pixels_per_point),
             capture,
         };
-        let (shown, finished) = gpu.frame(&plan)?;
+        let shown = gpu.frame(&plan)?;
         let presented = match shown {
             Shown::Presented(pixels) => {
                 self.mesh_key = Some(mesh_key);
@@ -542,7 +465,6 @@ impl App {
                 false
             }
         };
-        self.file_finished(finished);
         self.apply_panel(actions)?;
         Ok(presented.then_some(kind))
     }
@@ -586,28 +508,10 @@ impl App {
         Ok(())
     }
 
-    /// The mesh view and canvas of the last frame, for `--frame-stats`: where they are and what a
-    /// headless `render` needs to reproduce them.
-    fn views_json(&self) -> serde_json::Value {
-        use serde_json::json;
-        let Some(state) = self.state.as_ref() else { return json!(null) };
-        let l = state.layout;
-        let c = state.camera();
-        let v = |d: DVec3| format!("{},{},{}", d.x, d.y, d.z);
-        json!({
-            "mesh": { "x": l.mesh_x, "width": l.mesh_w, "height": l.height,
-                      "exposure": state.exposure * self.env_summary.exposure,
-                      "camera": format!("eye={} target={} up={} fov={}", v(c.eye), v(c.target), v(c.up), c.fov_deg),
-                      "spp": self.spp,
-                      "refined_spp": self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples()) },
-            "canvas": { "x": l.canvas_x, "side": l.canvas, "exposure": state.exposure,
-                        "light": v(state.settings.canvas.light) },
-        })
-    }
-
     fn finish(&mut self) -> Result<()> {
         if let Some(g) = self.gpu.as_mut() {
-            let finished = g.renderer.finish_frames()?;
+            g.renderer.finish_frames()?;
+            let finished = g.renderer.take_finished();
             self.file_finished(finished);
         }
         let Some(state) = self.state.as_ref() else { return Ok(()) };
@@ -621,7 +525,9 @@ impl App {
         if let Some(p) = &self.opts.frame_stats {
             let device = self.gpu.as_ref().map_or(String::new(), |g| g.renderer.device_name().to_string());
             let size = (state.layout.width, state.layout.height);
-            let json = stats::frame_stats_json(&device, size, &self.frame_stats, self.views_json());
+            let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
+            let views = stats::views_json(state, self.env_summary.exposure, self.spp, refined);
+            let json = stats::frame_stats_json(&device, size, &self.frame_stats, views);
             crate::fsio::write_atomic(p, json.as_bytes())?;
         }
         Ok(())

@@ -260,8 +260,9 @@ pub fn dialog(ctx: &egui::Context, dialog: &mut Option<Dialog>, out: &mut Action
             .unwrap_or_default();
         entries.sort();
         egui::ScrollArea::vertical().max_height(240.0).show(ui, |ui| {
-            if ui.selectable_label(false, "../").clicked() {
-                d.path = format!("{}/", folder.join("..").display());
+            let up = std::fs::canonicalize(&folder).ok().and_then(|p| p.parent().map(|p| p.to_path_buf()));
+            if let (true, Some(up)) = (ui.selectable_label(false, "(up one folder)").clicked(), up) {
+                d.path = format!("{}/", up.display());
             }
             for (dir, p) in &entries {
                 let name = p.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());

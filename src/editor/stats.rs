@@ -56,3 +56,20 @@ pub fn frame_stats_json(device: &str, size: (u32, u32), frames: &[FrameStat], vi
     s.push('\n');
     s
 }
+
+/// The mesh view and canvas of the last frame, for `--frame-stats`: where they are and what a
+/// headless `render` needs to reproduce them (`env_exposure`: the map's automatic exposure).
+pub fn views_json(state: &super::state::State, env_exposure: f64, spp: u32, refined: u32) -> serde_json::Value {
+    use serde_json::json;
+    let l = state.layout;
+    let c = state.camera();
+    let v = |d: glam::DVec3| format!("{},{},{}", d.x, d.y, d.z);
+    json!({
+        "mesh": { "x": l.mesh_x, "width": l.mesh_w, "height": l.height,
+                  "exposure": state.exposure * env_exposure,
+                  "camera": format!("eye={} target={} up={} fov={}", v(c.eye), v(c.target), v(c.up), c.fov_deg),
+                  "spp": spp, "refined_spp": refined },
+        "canvas": { "x": l.canvas_x, "side": l.canvas, "exposure": state.exposure,
+                    "light": v(state.settings.canvas.light) },
+    })
+}

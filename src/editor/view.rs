@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::render::compose::{Placement, WINDOW_FORMAT};
 use crate::render::{Progress, Renderer, Settings};
 use crate::vk::barrier;
-use crate::vk::frame::{Finished, FRAMES_IN_FLIGHT};
+use crate::vk::frame::FRAMES_IN_FLIGHT;
 use crate::vk::surface::{self, Surface};
 use crate::vk::swapchain::{Acquired, Swapchain};
 use crate::vk::{Buffer, Context, Image};
@@ -140,6 +140,15 @@ impl Gpu {
         Ok(self.swapchain.as_ref().map(|s| (s.extent.width, s.extent.height)))
     }
 
+    /// The window now has `size`: a swapchain of another size is dropped (not every platform reports
+    /// it out of date), so the next frame makes one of the window's size.
+    pub fn resized(&mut self, size: (u32, u32)) -> Result<()> {
+        if self.swapchain.as_ref().is_some_and(|s| (s.extent.width, s.extent.height) != size) {
+            self.drop_swapchain()?;
+        }
+        Ok(())
+    }
+
     /// Drops the swapchain (out of date: the next frame makes one for the window's size).
     fn drop_swapchain(&mut self) -> Result<()> {
         self.renderer.finish_frames()?;
@@ -149,10 +158,10 @@ impl Gpu {
         Ok(())
     }
 
-    /// Draws one frame as `plan` says (see the module). Returns what became of it and the GPU times
-    /// of an earlier frame that finished meanwhile.
-    pub fn frame(&mut self, plan: &Plan<'_>) -> Result<(Shown, Vec<Finished>)> {
-        let Some((w, h)) = self.swapchain_extent()? else { return Ok((Shown::OutOfDate, Vec::new())) };
+    /// Draws one frame as `plan` says (see the module): what became of it. The GPU times of
+    /// finished frames are the renderer's (`take_finished`).
+    pub fn frame(&mut self, plan: &Plan<'_>) -> Result<Shown> {
+        let Some((w, h)) = self.swapchain_extent()? else { return Ok(Shown::OutOfDate) };
         if self.window_image.as_ref().is_none_or(|i| (i.width, i.height) != (w, h)) {
             self.renderer.finish_frames()?;
             if let Some(old) = self.window_image.take() {
@@ -162,7 +171,7 @@ impl Gpu {
             self.window_image =
                 Some(Image::new(&self.renderer.ctx, (w, h), WINDOW_FORMAT, 1, usage, "window.composed")?);
         }
-        let mut finished: Vec<Finished> = self.renderer.begin_frame(plan.material)?.into_iter().collect();
+        self.renderer.begin_frame(plan.material)?;
         let number = self.renderer.frame_number();
         // Textures freed before a frame FRAMES_IN_FLIGHT back are no longer drawn by any frame in flight.
         while self.retired.front().is_some_and(|r| r.0 + (FRAMES_IN_FLIGHT as u64) < number) {
@@ -178,7 +187,7 @@ impl Gpu {
             Ok(Acquired::OutOfDate) => {
                 self.renderer.abandon_frame()?;
                 self.drop_swapchain()?;
-                return Ok((Shown::OutOfDate, finished));
+                return Ok(Shown::OutOfDate);
             }
             Err(e) => {
                 let _ = self.renderer.abandon_frame();
@@ -200,7 +209,7 @@ impl Gpu {
             self.retired.push_back((number, plan.ui.0.free.clone()));
         }
         let pixels = if plan.capture {
-            finished.extend(self.renderer.finish_frames()?);
+            self.renderer.finish_frames()?;
             let b = self.capture.as_ref().expect("made by record");
             let bgr = matches!(sc.format, vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB);
             let mut px = b.mapped()[..(w * h * 4) as usize].to_vec();
@@ -217,7 +226,7 @@ impl Gpu {
         if !presented {
             self.drop_swapchain()?;
         }
-        Ok((Shown::Presented(pixels), finished))
+        Ok(Shown::Presented(pixels))
     }
 
     /// Records the frame's GPU work after the swapchain image `index` was acquired.

@@ -19,6 +19,8 @@ pub struct Plan {
     /// The size of the lobe-count, triangle, spp and vec4 groups.
     pub size: (u32, u32),
     pub repeats: usize,
+    /// The window sizes of the viewer group (`measure::viewer`: the editor's frame without a window).
+    pub viewer_sizes: Vec<(u32, u32)>,
     /// The folder holding [`ENV`] (`--hdri`; see `measure::hdri_dir`).
     pub hdri: PathBuf,
 }
@@ -36,6 +38,7 @@ impl Plan {
             spps: vec![1, 4, 8, 16, 32, 64],
             size: (512, 512),
             repeats: 5,
+            viewer_sizes: vec![(1280, 720), (1920, 1080), (3840, 2160)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
@@ -48,6 +51,7 @@ impl Plan {
             spps: vec![4, 16],
             size: (96, 96),
             repeats: 3,
+            viewer_sizes: vec![(320, 180)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod error_vs_time;
 pub mod plot;
 pub mod stability;
+pub mod viewer;
 
 use std::path::{Path, PathBuf};
 

@@ -449,16 +449,17 @@ impl Renderer {
     }
 
     /// Starts a frame on the ring (waiting only for the frame that last used its slot) and writes
-    /// `material` into the frame's buffer. Returns the GPU times of that earlier frame, if not read.
-    pub fn begin_frame(&mut self, material: &Material) -> Result<Option<Finished>> {
+    /// `material` into the frame's buffer. That earlier frame's GPU times join the finished ones
+    /// ([`Renderer::take_finished`]).
+    pub fn begin_frame(&mut self, material: &Material) -> Result<()> {
         let n = material.lobes.len() as u32;
         let ring = self.ring.as_mut().expect("ring lives until drop");
-        let finished = ring.begin(&self.ctx, 8 + n, 8 + n)?;
+        ring.begin(&self.ctx, 8 + n, 8 + n)?;
         if let Err(e) = ring.current().upload(&self.ctx, "material", &gpu::material_bytes(material)) {
             let _ = ring.abandon(&self.ctx);
             return Err(e);
         }
-        Ok(finished)
+        Ok(())
     }
 
     /// Submits the frame begun by [`Renderer::begin_frame`] (waiting on `wait` at its stage,
@@ -476,9 +477,15 @@ impl Renderer {
         self.ring.as_mut().expect("ring lives until drop").abandon(&self.ctx)
     }
 
-    /// Waits for the frames in flight; their GPU times, oldest first.
-    pub fn finish_frames(&mut self) -> Result<Vec<Finished>> {
+    /// Waits for the frames in flight (their GPU times join the finished ones).
+    pub fn finish_frames(&mut self) -> Result<()> {
         self.ring.as_mut().expect("ring lives until drop").wait_all(&self.ctx)
+    }
+
+    /// The GPU times of every frame finished since the last call, oldest first (frames are settled
+    /// whenever their slot is reused or the renderer waits for the frames in flight).
+    pub fn take_finished(&mut self) -> Vec<Finished> {
+        self.ring.as_mut().expect("ring lives until drop").take_finished()
     }
 
     /// The command buffer and the acquire semaphore of the frame being recorded, for the caller's

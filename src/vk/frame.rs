@@ -149,6 +149,8 @@ pub struct FrameRing {
     current: usize,
     count: u64,
     recording: bool,
+    /// Times of settled frames not yet taken ([`FrameRing::take_finished`]).
+    finished: Vec<Finished>,
 }
 
 impl FrameRing {
@@ -160,7 +162,8 @@ impl FrameRing {
         // SAFETY: the device is live; the pool is destroyed in `destroy`.
         let pool = unsafe { raw.create_command_pool(&info, None) }.map_err(vk_err("vkCreateCommandPool"))?;
         ctx.device.set_name(pool, "frames.pool");
-        let mut ring = FrameRing { pool, frames: Vec::new(), current: 0, count: 0, recording: false };
+        let mut ring =
+            FrameRing { pool, frames: Vec::new(), current: 0, count: 0, recording: false, finished: Vec::new() };
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -187,13 +190,13 @@ impl FrameRing {
 
     /// Waits for the next slot's previous frame, readies its pool (reset; grown to `sets` sets) and
     /// queries (room for `passes` passes), and begins its command buffer with the queries reset.
-    /// Returns that earlier frame's GPU times unless they were read already.
-    pub fn begin(&mut self, ctx: &Context, sets: u32, passes: u32) -> Result<Option<Finished>> {
+    /// That earlier frame's GPU times join the finished ones.
+    pub fn begin(&mut self, ctx: &Context, sets: u32, passes: u32) -> Result<()> {
         if self.recording {
             return Err(crate::Error::NoDevice("a frame was begun twice".into()));
         }
         self.current = (self.current + 1) % self.frames.len();
-        let finished = self.settle(ctx, self.current)?;
+        self.settle(ctx, self.current)?;
         let f = &mut self.frames[self.current];
         f.reserve(ctx, sets, passes)?;
         let raw = ctx.raw();
@@ -211,14 +214,14 @@ impl FrameRing {
         self.count += 1;
         f.number = self.count;
         self.recording = true;
-        Ok(finished)
+        Ok(())
     }
 
-    /// Waits for slot `i` if it is pending; its times unless read.
-    fn settle(&mut self, ctx: &Context, i: usize) -> Result<Option<Finished>> {
+    /// Waits for slot `i` if it is pending; its times join the finished ones.
+    fn settle(&mut self, ctx: &Context, i: usize) -> Result<()> {
         let f = &mut self.frames[i];
         if !f.pending {
-            return Ok(None);
+            return Ok(());
         }
         // SAFETY: the fence belongs to a submission of this slot.
         unsafe {
@@ -226,11 +229,19 @@ impl FrameRing {
             ctx.raw().reset_fences(&[f.fence]).map_err(vk_err("vkResetFences"))?;
         }
         f.pending = false;
-        if f.read {
-            return Ok(None);
+        if !f.read {
+            f.read = true;
+            let timings = f.timestamps.read(ctx)?;
+            self.finished.push(Finished { number: f.number, timings });
         }
-        f.read = true;
-        Ok(Some(Finished { number: f.number, timings: f.timestamps.read(ctx)? }))
+        Ok(())
+    }
+
+    /// The GPU times of the frames finished since the last call, oldest first.
+    pub fn take_finished(&mut self) -> Vec<Finished> {
+        let mut out = std::mem::take(&mut self.finished);
+        out.sort_by_key(|f| f.number);
+        out
     }
 
     /// The frame being recorded.
@@ -288,17 +299,21 @@ impl FrameRing {
 
     /// Waits for the frame just submitted and returns its GPU times (the headless path).
     pub fn wait(&mut self, ctx: &Context) -> Result<Vec<PassTime>> {
-        Ok(self.settle(ctx, self.current)?.map(|f| f.timings).unwrap_or_default())
+        self.settle(ctx, self.current)?;
+        let number = self.frames[self.current].number;
+        Ok(match self.finished.iter().position(|f| f.number == number) {
+            Some(k) => self.finished.remove(k).timings,
+            None => Vec::new(),
+        })
     }
 
-    /// Waits for every frame in flight (before objects they use are destroyed); their times.
-    pub fn wait_all(&mut self, ctx: &Context) -> Result<Vec<Finished>> {
-        let mut out = Vec::new();
+    /// Waits for every frame in flight (before objects they use are destroyed); their times join
+    /// the finished ones.
+    pub fn wait_all(&mut self, ctx: &Context) -> Result<()> {
         for i in 0..self.frames.len() {
-            out.extend(self.settle(ctx, i)?);
+            self.settle(ctx, i)?;
         }
-        out.sort_by_key(|f| f.number);
-        Ok(out)
+        Ok(())
     }
 
     pub fn destroy(mut self, ctx: &Context) {
