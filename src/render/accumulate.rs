@@ -33,14 +33,7 @@ impl AccumulatePass {
         first: bool,
     ) -> Result<()> {
         if first {
-            targets.sum.barrier(
-                ctx,
-                cmd,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::GENERAL,
-                barrier::EARLIER_READS,
-                barrier::COMPUTE_READ_WRITE,
-            );
+            targets.sum.discard_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
         }
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
         descriptor::write(

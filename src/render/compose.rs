@@ -69,14 +69,7 @@ impl ComposePass {
         (mesh, canvas): (&Image, &Image),
         p: &Placement,
     ) -> Result<()> {
-        window.barrier(
-            ctx,
-            cmd,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::GENERAL,
-            barrier::EARLIER_READS,
-            barrier::COMPUTE_WRITE,
-        );
+        window.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
         descriptor::write(
             ctx,

@@ -68,14 +68,7 @@ impl Targets {
     /// Makes the accumulation image writable by the compute pass that starts a frame (its old
     /// contents are dropped, after any earlier frame's reads).
     pub fn start_accum(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        self.accum.barrier(
-            ctx,
-            cmd,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::GENERAL,
-            barrier::EARLIER_READS,
-            barrier::COMPUTE_WRITE,
-        );
+        self.accum.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -104,6 +104,19 @@ impl Image {
         super::barrier::image(ctx, cmd, self.raw, range(self.aspect, self.mip_levels), (from, to), src, dst);
     }
 
+    /// Makes the image writable in `GENERAL` by `dst`, dropping its contents once earlier frames'
+    /// reads of it are done (the persistent targets are rewritten each frame).
+    pub fn discard_to_general(&self, ctx: &Context, cmd: vk::CommandBuffer, dst: super::barrier::Scope) {
+        self.barrier(
+            ctx,
+            cmd,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::GENERAL,
+            super::barrier::EARLIER_READS,
+            dst,
+        );
+    }
+
     /// Records copies of every level from `staging` (levels packed one after another, tightly) and
     /// leaves the image in `SHADER_READ_ONLY_OPTIMAL` for compute shaders.
     pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer, staging: &Buffer, level_offsets: &[u64]) {
