@@ -1,6 +1,7 @@
 //! `bench`: GPU milliseconds per pass (timestamps; median, minimum and maximum of repeated frames)
 //! against lobe count, image size, triangle count and samples per lobe, the estimators (`key`, `fis`,
-//! `plain`, `mis`) on one frame, and the `vec4` lobe pass against its scalar loop. Prints a table; writes JSON on request.
+//! `plain`, `mis`) on one frame, the `vec4` lobe pass against its scalar loop, and the G-buffer with
+//! hidden faces culled against all faces drawn. Prints a table; writes JSON on request.
 
 use std::path::PathBuf;
 
@@ -143,7 +144,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     let sphere = Mesh::sphere();
     let four = material(4);
     let mut out = Vec::new();
-    let total = plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2 + 4;
+    let total = plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2 + 2 + 4;
     let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
     // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
     let tick = || {
@@ -197,6 +198,14 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
         let m = measure(r, &four, &settings(plan.size, 8), plan.repeats);
         r.scalar_lobes = false;
         push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
+        tick()?;
+    }
+    // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
+    for cull in [true, false] {
+        r.cull_hidden_faces = cull;
+        let m = measure(r, &four, &settings(plan.size, 8), plan.repeats);
+        r.cull_hidden_faces = true;
+        push("culling", (if cull { "hidden culled" } else { "all faces" }).to_string(), sphere.triangle_count(), m?);
         tick()?;
     }
     for &(seg, rings) in &plan.tessellations {

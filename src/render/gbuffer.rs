@@ -5,6 +5,7 @@ use ash::vk;
 
 use super::mesh::{GpuMesh, VERTEX_STRIDE};
 use super::targets::{Targets, DEPTH_FORMAT, GBUFFER_FORMAT};
+use crate::scene::mesh::Hidden;
 use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
@@ -29,7 +30,8 @@ impl GBufferPass {
         Ok(GBufferPass { pipeline })
     }
 
-    /// Records the pass; leaves position and normal in `GENERAL` for the compute passes.
+    /// Records the pass; leaves position and normal in `GENERAL` for the compute passes. With `cull`,
+    /// the faces the mesh hides from an eye outside it are skipped (the caller checks the eye).
     pub fn record(
         &self,
         ctx: &Context,
@@ -37,7 +39,16 @@ impl GBufferPass {
         targets: &Targets,
         mesh: &GpuMesh,
         view_proj: &glam::Mat4,
+        cull: bool,
     ) {
+        // Vulkan judges the winding on the framebuffer (y down), where `view_proj` (view space with
+        // y down the image) keeps the winding seen from the eye: a face counter-clockwise from the eye
+        // is counter-clockwise there.
+        let (cull_mode, front) = match (cull, mesh.hidden) {
+            (true, Hidden::Clockwise) => (vk::CullModeFlags::BACK, vk::FrontFace::COUNTER_CLOCKWISE),
+            (true, Hidden::CounterClockwise) => (vk::CullModeFlags::BACK, vk::FrontFace::CLOCKWISE),
+            _ => (vk::CullModeFlags::NONE, vk::FrontFace::CLOCKWISE),
+        };
         let none = crate::vk::barrier::EARLIER_READS;
         let color = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
         let depth_access = (
@@ -94,6 +105,8 @@ impl GBufferPass {
             raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
             raw.cmd_set_viewport(cmd, 0, &[viewport]);
             raw.cmd_set_scissor(cmd, 0, &[area]);
+            raw.cmd_set_cull_mode(cmd, cull_mode);
+            raw.cmd_set_front_face(cmd, front);
             raw.cmd_push_constants(
                 cmd,
                 self.pipeline.layout,

@@ -2,6 +2,7 @@
 
 use ash::vk;
 
+use crate::scene::mesh::Hidden;
 use crate::scene::Mesh;
 use crate::vk::{Buffer, Context};
 use crate::Result;
@@ -12,6 +13,8 @@ pub struct GpuMesh {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
+    /// The faces an eye outside the mesh never sees (the G-buffer pass skips them).
+    pub hidden: Hidden,
     /// What this was built from (rebuilt only when the mesh changes).
     pub key: (String, usize, usize),
 }
@@ -42,7 +45,13 @@ impl GpuMesh {
                 return Err(e);
             }
         };
-        Ok(GpuMesh { vertices, indices, index_count: mesh.indices.len() as u32, key: key(mesh) })
+        Ok(GpuMesh {
+            vertices,
+            indices,
+            index_count: mesh.indices.len() as u32,
+            hidden: mesh.hidden_faces(),
+            key: key(mesh),
+        })
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -217,6 +217,9 @@ impl Passes {
 pub struct Renderer {
     /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
     pub scalar_lobes: bool,
+    /// Skip the faces a closed mesh hides from an eye outside it (`Mesh::hidden_faces`); the image
+    /// is the same either way (tests compare the two).
+    pub cull_hidden_faces: bool,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -261,6 +264,7 @@ impl Renderer {
         };
         Ok(Renderer {
             scalar_lobes: false,
+            cull_hidden_faces: true,
             seed: 0,
             passes: Some(passes),
             env: None,
@@ -376,7 +380,7 @@ impl Renderer {
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
         self.begin_frame(material)?;
-        let recorded = self.record(material, settings, Progress::Fresh).and_then(|()| {
+        let recorded = self.record_view(material, settings, Progress::Fresh, false).and_then(|()| {
             let (w, h) = (settings.width, settings.height);
             if self.readback.as_ref().is_none_or(|b| b.size != w as u64 * h as u64 * 16) {
                 self.idle()?;
@@ -529,6 +533,12 @@ impl Renderer {
     /// into that view's persistent targets. `Progress::Refine` adds `settings.spp` more `mis` samples
     /// to the mesh view's running sum (continuing its sequence); `Fresh` restarts it.
     pub fn record(&mut self, material: &Material, settings: &Settings, progress: Progress) -> Result<()> {
+        self.record_view(material, settings, progress, true)
+    }
+
+    /// [`Renderer::record`]; with `reuse`, a mesh view whose mesh, camera and size are unchanged keeps
+    /// its G-buffer (the headless `render` always rasterises: a frame of its own, timed whole).
+    fn record_view(&mut self, material: &Material, settings: &Settings, progress: Progress, reuse: bool) -> Result<()> {
         self.check_size(settings)?;
         let refine = matches!(progress, Progress::Refine) && settings.view == View::Mesh;
         if refine && settings.estimator != Estimator::Mis {
@@ -600,6 +610,21 @@ impl Renderer {
         let material_buf = buffers.get("material").expect("written by begin_frame");
         let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
         let passes = self.passes.as_ref().expect("passes live until drop");
+        // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
+        // the farthest point of the frustum in front of the near plane.
+        let (tx, ty) = settings.camera.half_extents(w, h);
+        let near_reach = crate::scene::camera::NEAR * (1.0 + tx * tx + ty * ty).sqrt();
+        let cull = self.cull_hidden_faces && settings.camera.eye.length() > 1.0 + near_reach;
+        let gbuffer_key = mesh_view.then(|| {
+            let mesh = self.mesh.as_ref().expect("checked above");
+            (mesh.key.clone(), settings.camera.clone(), cull)
+        });
+        let targets = self.views[slot].as_mut().expect("made above");
+        let raster = !reuse || targets.gbuffer_of != gbuffer_key;
+        if raster {
+            // Set again once the whole view is recorded (an error leaves nothing to reuse).
+            targets.gbuffer_of = None;
+        }
         let targets = self.views[slot].as_ref().expect("made above");
         let mut push = Push::default();
         camera_push(&settings.camera, w, h, &mut push);
@@ -612,10 +637,12 @@ impl Renderer {
         }
         let mesh = self.mesh.as_ref().expect("checked above");
         let vp = settings.camera.view_proj(w, h);
-        ts.time(ctx, cmd, "gbuffer", || {
-            passes.gbuffer.record(ctx, cmd, targets, mesh, &vp);
-            Ok(())
-        })?;
+        if raster {
+            ts.time(ctx, cmd, "gbuffer", || {
+                passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
+                Ok(())
+            })?;
+        }
         ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
         match settings.estimator {
             Estimator::Mis => {
@@ -650,6 +677,7 @@ impl Renderer {
         } else {
             self.refined = 0;
         }
+        self.views[slot].as_mut().expect("made above").gbuffer_of = gbuffer_key;
         Ok(())
     }
 }

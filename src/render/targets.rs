@@ -19,7 +19,12 @@ pub struct Targets {
     pub accum: Image,
     /// The running sum of progressive refinement frames (see `accumulate`).
     pub sum: Image,
+    /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
+    pub gbuffer_of: Option<GBufferKey>,
 }
+
+/// What a G-buffer was rasterised from.
+pub type GBufferKey = ((String, usize, usize), crate::scene::Camera, bool);
 
 impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
@@ -62,7 +67,16 @@ impl Targets {
         }
         let mut it = made.into_iter();
         let mut next = || it.next().expect("five images were made");
-        Ok(Targets { width, height, position: next(), normal: next(), depth: next(), accum: next(), sum: next() })
+        Ok(Targets {
+            width,
+            height,
+            position: next(),
+            normal: next(),
+            depth: next(),
+            accum: next(),
+            sum: next(),
+            gbuffer_of: None,
+        })
     }
 
     /// Makes the accumulation image writable by the compute pass that starts a frame (its old

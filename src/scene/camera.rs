@@ -131,7 +131,7 @@ impl Camera {
 
     /// `tan(fov/2)` times the aspect ratio and `tan(fov/2)`: the half extents of the image plane at
     /// distance 1.
-    fn half_extents(&self, width: u32, height: u32) -> (f64, f64) {
+    pub fn half_extents(&self, width: u32, height: u32) -> (f64, f64) {
         let t = (self.fov_deg.to_radians() / 2.0).tan();
         (t * width as f64 / height as f64, t)
     }

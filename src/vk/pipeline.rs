@@ -180,7 +180,13 @@ impl Pipeline {
             .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
             .collect();
         let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        // Culling is per mesh (which faces it hides), so it is set when drawing.
+        let dynamic_states = [
+            vk::DynamicState::VIEWPORT,
+            vk::DynamicState::SCISSOR,
+            vk::DynamicState::CULL_MODE,
+            vk::DynamicState::FRONT_FACE,
+        ];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering =
             vk::PipelineRenderingCreateInfo::default().color_attachment_formats(colors).depth_attachment_format(depth);

@@ -7,6 +7,7 @@
 //! never derived from UVs, which are not read): the shading frame comes from the interpolated normal
 //! by SPEC §1's rule.
 
+mod closure;
 mod gltf;
 mod obj;
 mod ply;
@@ -16,6 +17,8 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
+
+pub use closure::Hidden;
 
 /// The largest mesh file (and glTF buffer file) read, in bytes, checked before it is read: a
 /// million-triangle OBJ is about 60 MB, and loading takes roughly ten times the file's size in
