@@ -157,7 +157,7 @@ impl App {
             .with_inner_size(winit::dpi::PhysicalSize::new(self.opts.size.0, self.opts.size.1));
         let window =
             Arc::new(el.create_window(attrs).map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?);
-        let mut gpu = Gpu::new(window, el)?;
+        let mut gpu = Gpu::new(window)?;
         gpu.renderer.set_environment(&self.env)?;
         gpu.renderer.set_mesh(&self.mesh)?;
         self.egui_state = Some(egui_winit::State::new(

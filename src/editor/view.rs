@@ -11,7 +11,6 @@ use std::sync::Arc;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
-use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
 use crate::brdf::Material;
@@ -101,7 +100,7 @@ fn painter(ctx: &Context, format: vk::Format) -> Result<egui_ash_renderer::Rende
 impl Gpu {
     /// Opens the window's device objects: the renderer (on a device that can present to `window`),
     /// its surface, the swapchain and the panel's painter.
-    pub fn new(window: Arc<Window>, _el: &ActiveEventLoop) -> Result<Gpu> {
+    pub fn new(window: Arc<Window>) -> Result<Gpu> {
         let display = window.display_handle().map_err(|e| Error::NoDevice(format!("no display handle: {e}")))?.as_raw();
         let handle = window.window_handle().map_err(|e| Error::NoDevice(format!("no window handle: {e}")))?.as_raw();
         let ctx = Context::from_env_with(&surface::required_extensions(display)?)?;
@@ -272,13 +271,12 @@ impl Gpu {
             .src_offsets(corner)
             .dst_subresource(layers)
             .dst_offsets(corner);
-        let layouts = |a, b| (a, b);
         barrier::image(
             ctx,
             cmd,
             image,
             range,
-            layouts(vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
             (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::NONE),
             barrier::TRANSFER_WRITE,
         );
@@ -300,7 +298,7 @@ impl Gpu {
             cmd,
             image,
             range,
-            layouts(vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
+            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
             barrier::TRANSFER_WRITE,
             barrier::COLOR_ATTACHMENT,
         );
@@ -326,7 +324,7 @@ impl Gpu {
                 cmd,
                 image,
                 range,
-                layouts(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
                 barrier::COLOR_ATTACHMENT,
                 barrier::TRANSFER_READ,
             );
@@ -345,7 +343,7 @@ impl Gpu {
                 cmd,
                 image,
                 range,
-                layouts(vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
                 barrier::TRANSFER_READ,
                 present,
             );
@@ -355,7 +353,7 @@ impl Gpu {
                 cmd,
                 image,
                 range,
-                layouts(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
                 barrier::COLOR_ATTACHMENT,
                 present,
             );
