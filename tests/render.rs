@@ -334,6 +334,36 @@ fn refinement_frames_accumulate_on_the_gpu_into_one_estimate() {
     assert_eq!(r.refined_samples(), 0);
 }
 
+/// A frame abandoned after a swapchain acquire (the editor's recording failed) consumes the
+/// acquire's semaphore: six frames over the two slots, each slot's semaphore signalled as an acquire
+/// would and the frame then abandoned, leave no validation error — a binary semaphore signalled again
+/// before a wait is one (VUID-vkQueueSubmit-pSignalSemaphores-00067), which is what ending the command
+/// buffer alone (`abandon_frame`) left behind — and the ring renders normally after.
+#[test]
+fn a_frame_abandoned_after_an_acquire_consumes_its_semaphore() {
+    use ash::vk;
+    let mut r = renderer();
+    r.set_environment(&env("venice.exr")).unwrap();
+    r.set_mesh(&Mesh::sphere()).unwrap();
+    let m = &common::feature_materials()[0].1;
+    for _ in 0..6 {
+        r.begin_frame(m).unwrap();
+        let (_, acquired) = r.frame_commands();
+        let signal = [acquired];
+        let info = vk::SubmitInfo::default().signal_semaphores(&signal);
+        // SAFETY: the semaphore is the current slot's, unsignalled unless an earlier abandon left it
+        // signalled (what the validation layer is to catch), and lives as long as the renderer.
+        unsafe { r.ctx.raw().queue_submit(r.ctx.device.queue, &[info], vk::Fence::null()) }.unwrap();
+        r.abandon_acquired_frame(acquired).unwrap();
+    }
+    r.finish_frames().unwrap();
+    r.ctx.check_validation().unwrap();
+    let im = r.render(m, &settings(16, 4, Estimator::Key)).unwrap().image;
+    assert_finite("after the abandoned frames", &im);
+    assert!(im.pixels.iter().any(|p| p[3] > 0.5 && p[0] > 0.0), "an empty image after the abandoned frames");
+    r.ctx.check_validation().unwrap();
+}
+
 /// The `key` estimator (issue 10) converges to the reference: at 512 samples per lobe component
 /// (and 512 light samples) it is within 3 % of the CPU reference for every feature material — the
 /// split, symmetrised and reciprocal facet lobes exercise its multiple-importance weights, which

@@ -193,12 +193,12 @@ impl Gpu {
                 return Err(e);
             }
         };
-        match self.record(plan, index) {
-            Ok(()) => {}
-            Err(e) => {
-                let _ = self.renderer.abandon_frame();
-                return Err(e);
-            }
+        if let Err(e) = self.record(plan, index) {
+            // The acquire signalled `acquired` and handed out image `index`: consume the one, and
+            // release the other with its swapchain (it cannot be presented unrendered).
+            let _ = self.renderer.abandon_acquired_frame(acquired);
+            let _ = self.drop_swapchain();
+            return Err(e);
         }
         let sc = self.swapchain.as_ref().expect("made above");
         let rendered = sc.rendered[index as usize];

@@ -73,6 +73,10 @@ pub struct GpuKeyLights {
     pub texels: Image,
     /// Where each frame's light samples come from.
     pub sampling: keylight::LightSampling,
+    /// The lights' quadrature points (`keylight::point_table`), for lobes much wider than the lights.
+    pub points: Buffer,
+    /// The lights, as detected.
+    pub lights: Vec<keylight::KeyLight>,
     pub count: u32,
 }
 
@@ -91,11 +95,13 @@ impl KeyLightSummary {
             "decision": self.describe(),
             "threshold": self.threshold,
             "threshold_over_mean": crate::scene::keylight::THRESHOLD_OVER_MEAN,
+            "quadrature_ratio": crate::scene::keylight::QUADRATURE_RATIO,
             "share": self.share,
             "lights": self.lights.iter().map(|l| serde_json::json!({
                 "direction": [l.direction.x, l.direction.y, l.direction.z],
                 "angular_radius_deg": l.angular_radius.to_degrees(),
                 "extent_deg": l.extent.to_degrees(),
+                "spread_deg": l.spread.to_degrees(),
                 "solid_angle": l.solid_angle,
                 "power": l.power,
                 "texels": l.texels,
@@ -106,7 +112,7 @@ impl KeyLightSummary {
     /// One line: how many lights, their share of the energy, the threshold, and each light's radius and
     /// direction (or why there is none).
     pub fn describe(&self) -> String {
-        use crate::scene::keylight::{MIN_SHARE, THRESHOLD_OVER_MEAN};
+        use crate::scene::keylight::{MIN_SHARE, QUADRATURE_RATIO, THRESHOLD_OVER_MEAN};
         if self.lights.is_empty() {
             return format!(
                 "no key light (no compact region above {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4} carries ≥ {:.0} % of the energy): no light term",
@@ -119,15 +125,24 @@ impl KeyLightSummary {
             .iter()
             .map(|l| {
                 let d = l.direction;
-                format!("radius {:.2}° toward ({:.3}, {:.3}, {:.3})", l.angular_radius.to_degrees(), d.x, d.y, d.z)
+                format!(
+                    "radius {:.2}°, spread {:.2}° toward ({:.3}, {:.3}, {:.3})",
+                    l.angular_radius.to_degrees(),
+                    l.spread.to_degrees(),
+                    d.x,
+                    d.y,
+                    d.z
+                )
             })
             .collect();
+        let spread = self.lights.iter().map(|l| l.spread).fold(0.0, f64::max);
         format!(
-            "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}",
+            "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}; lobes with min(αx, αy) ≥ {:.4} (the largest spread ≤ {QUADRATURE_RATIO} α) see them as 4 quadrature points each, the others by MIS",
             self.lights.len(),
             self.share * 100.0,
             self.threshold,
-            each.join("; ")
+            each.join("; "),
+            spread / QUADRATURE_RATIO
         )
     }
 }
@@ -217,6 +232,8 @@ impl GpuKeyLights {
                 return Err(crate::Error::input(env.origin.clone(), "the key lights carry no energy"));
             };
             made.push(storage(ctx, &cone_table(&keys.lights), "keylights.cones")?);
+            let points: Vec<f32> = keylight::point_table(&keys.lights).concat();
+            made.push(storage(ctx, &points, "keylights.points")?);
             Ok(sampling)
         })();
         let texels = built.and_then(|sampling| {
@@ -232,17 +249,18 @@ impl GpuKeyLights {
                 return Err(e);
             }
         };
-        let [sh, cones]: [Buffer; 2] = match made.try_into() {
+        let [sh, cones, points]: [Buffer; 3] = match made.try_into() {
             Ok(b) => b,
-            Err(_) => unreachable!("the closure pushed two buffers before succeeding"),
+            Err(_) => unreachable!("the closure pushed three buffers before succeeding"),
         };
-        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, count: keys.lights.len() as u32 })
+        let (lights, count) = (keys.lights.clone(), keys.lights.len() as u32);
+        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, count })
     }
 
     fn destroy(self, ctx: &Context) {
         self.residual.destroy(ctx);
         self.texels.destroy(ctx);
-        for b in [self.sh, self.cones] {
+        for b in [self.sh, self.cones, self.points] {
             b.destroy(ctx);
         }
     }

@@ -39,11 +39,14 @@ pub struct Variant {
     pub prefilter: bool,
     /// Four samples at a time (`vec4`); false is the scalar baseline of `bench`.
     pub vec4: bool,
-    /// The `key` estimator's residual pass: in-shader Halton rotated per pixel, the residual map,
+    /// The `key` estimator's residual pass: an in-shader Hammersley set shifted per frame, the residual map,
     /// the lod bias [`KEY_LOD_BIAS`].
     pub key: bool,
     /// A `key` variant for a map with key lights: adds the lobe under them by MIS.
     pub lights: bool,
+    /// With `lights`, a lobe much wider than every light (`keylight::quadrature_fits`): the lights
+    /// are their quadrature points, evaluated exactly, and the BRDF samples read the residual only.
+    pub points: bool,
 }
 
 /// The lod bias of the `key` estimator's residual passes, in place of the paper's `+1`: 0 makes a
@@ -67,6 +70,7 @@ impl Variant {
             vec4: true,
             key: false,
             lights: false,
+            points: false,
         }
     }
 
@@ -82,6 +86,7 @@ impl Variant {
             (!self.vec4, "scalar"),
             (self.key, "key"),
             (self.lights, "lights"),
+            (self.points, "points"),
         ]
         .iter()
         .filter(|f| f.0)
@@ -90,7 +95,7 @@ impl Variant {
         flags.join(",")
     }
 
-    fn constants(&self) -> [u32; 10] {
+    fn constants(&self) -> [u32; 11] {
         [
             self.aniso,
             self.rotated,
@@ -102,6 +107,7 @@ impl Variant {
             self.facet,
             self.key,
             self.lights,
+            self.points,
         ]
         .map(u32::from)
     }
@@ -117,7 +123,8 @@ pub struct Job<'a> {
     pub seed: u32,
     pub material: &'a Buffer,
     pub halton: &'a Buffer,
-    /// The frame's light samples, how many, and the sample counts of the bright and dark sets.
+    /// The frame's light samples, how many, and the sample counts of the bright and dark sets (for a
+    /// `points` variant: the lights' points, how many, and zeros).
     pub light_samples: Option<(&'a Buffer, u32, [f32; 2])>,
 }
 

@@ -53,8 +53,9 @@ pub enum Estimator {
     /// Environment and BRDF sampling combined by the balance heuristic, diffuse included.
     Mis,
     /// Issue 10's default: the map's key lights split off; each lobe pass integrates the residual map
-    /// (prefiltered, rotated Halton points, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe under the
-    /// lights (light and BRDF samples, balance heuristic); the diffuse pass takes the residual's SH9
+    /// (prefiltered, a Hammersley set shifted per frame, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe
+    /// under the lights (light and BRDF samples, balance heuristic, or the lights' quadrature points
+    /// for a lobe much wider than them); the diffuse pass takes the residual's SH9
     /// and the lights as distant sources.
     Key,
 }
@@ -481,6 +482,12 @@ impl Renderer {
         self.ring.as_mut().expect("ring lives until drop").abandon(&self.ctx)
     }
 
+    /// Ends the frame being recorded without running it after a swapchain acquire signalled
+    /// `acquired` (see [`crate::vk::frame::FrameRing::abandon_acquired`]).
+    pub fn abandon_acquired_frame(&mut self, acquired: vk::Semaphore) -> Result<()> {
+        self.ring.as_mut().expect("ring lives until drop").abandon_acquired(&self.ctx, acquired)
+    }
+
     /// Waits for the frames in flight (their GPU times join the finished ones).
     pub fn finish_frames(&mut self) -> Result<()> {
         self.ring.as_mut().expect("ring lives until drop").wait_all(&self.ctx)
@@ -570,19 +577,23 @@ impl Renderer {
         // Which lobes get a pass: non-zero albedo only.
         let prefilter = matches!(settings.estimator, Estimator::Fis | Estimator::Key);
         let key = settings.estimator == Estimator::Key;
-        let lights = key && self.env.as_ref().is_some_and(|e| e.keys.is_some());
+        let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
+        let lights = key_lights.is_some();
         let lobes: Vec<(u32, lobe::Variant)> = material
             .lobes
             .iter()
             .enumerate()
             .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
             .map(|(i, l)| {
+                let points = key_lights
+                    .is_some_and(|k| crate::scene::keylight::quadrature_fits(&k.lights, l.alpha_x, l.alpha_y));
                 (
                     i as u32,
                     lobe::Variant {
                         vec4: !self.scalar_lobes,
                         key,
                         lights,
+                        points,
                         ..lobe::Variant::of(material, l, prefilter)
                     },
                 )
@@ -598,7 +609,8 @@ impl Renderer {
         let ctx = &self.ctx;
         let ring = self.ring.as_mut().expect("ring lives until drop");
         let mut light_counts = None;
-        if let (true, true, Some(keys)) = (mesh_view, lights, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
+        let sampled = lobes.iter().any(|l| l.1.lights && !l.1.points);
+        if let (true, true, Some(keys)) = (mesh_view, sampled, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
             let m = key_light_samples(settings.spp);
             let samples = keys.frame_samples(m, self.seed);
             ring.current().upload(ctx, "keylights.frame", bytemuck::cast_slice(&samples))?;
@@ -609,6 +621,8 @@ impl Renderer {
         let (ts, buffers) = frame.parts();
         let material_buf = buffers.get("material").expect("written by begin_frame");
         let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
+        let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
+        let light_points = key_lights.map(|k| (&k.points, 4 * k.count, [0.0; 2]));
         let passes = self.passes.as_ref().expect("passes live until drop");
         // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
         // the farthest point of the frustum in front of the near plane.
@@ -663,7 +677,7 @@ impl Renderer {
                             seed: self.seed,
                             material: material_buf,
                             halton,
-                            light_samples,
+                            light_samples: if v.points { light_points } else { light_samples },
                         };
                         passes.lobe.record(&rec, v, &job)
                     })?;

@@ -297,6 +297,21 @@ impl FrameRing {
         Ok(())
     }
 
+    /// Ends the current frame without running what it recorded, but consumes `acquired` (a swapchain
+    /// acquire already signalled it): an empty submission waits on it and signals the slot's fence,
+    /// so the semaphore is unsignalled before the slot acquires with it again. The frame has no times.
+    pub fn abandon_acquired(&mut self, ctx: &Context, acquired: vk::Semaphore) -> Result<()> {
+        self.abandon(ctx)?;
+        let f = &mut self.frames[self.current];
+        let (waits, stages) = ([acquired], [vk::PipelineStageFlags::ALL_COMMANDS]);
+        let info = vk::SubmitInfo::default().wait_semaphores(&waits).wait_dst_stage_mask(&stages);
+        // SAFETY: the fence is unsignalled (reset when settled); the submission has no command buffers.
+        unsafe { ctx.raw().queue_submit(ctx.device.queue, &[info], f.fence) }.map_err(vk_err("vkQueueSubmit"))?;
+        f.pending = true;
+        f.read = true;
+        Ok(())
+    }
+
     /// Waits for the frame just submitted and returns its GPU times (the headless path).
     pub fn wait(&mut self, ctx: &Context) -> Result<Vec<PassTime>> {
         self.settle(ctx, self.current)?;
