@@ -201,7 +201,7 @@ impl LightSampling {
     /// How many samples the dark set takes beside `m` of the bright one: none without dark texels,
     /// else a quarter as many (at least one).
     pub fn dark_samples(&self, m: u32) -> u32 {
-        if self.sets[1].is_empty() || m == 0 {
+        if self.sets[1].is_empty() {
             0
         } else {
             (m / 4).max(1)
@@ -219,9 +219,6 @@ impl LightSampling {
         let mut out = Vec::new();
         for (set, n) in self.sets.iter().zip([m, self.dark_samples(m)]) {
             for k in 0..n as u64 {
-                if n == 0 {
-                    break;
-                }
                 let x = ((k as f64 + shift[0].fract()) / n as f64).clamp(0.0, 1.0);
                 let at = set.partition_point(|p| p.1 <= x).saturating_sub(1);
                 let Some(&(texel, _)) = set.get(at) else {
