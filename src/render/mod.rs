@@ -221,6 +221,9 @@ pub struct Renderer {
     /// Skip the faces a closed mesh hides from an eye outside it (`Mesh::hidden_faces`); the image
     /// is the same either way (tests compare the two).
     pub cull_hidden_faces: bool,
+    /// Let the `key` lobe passes of narrow lobes skip the key lights at pixels whose lobe cannot
+    /// reach them (`lobe::reach_test_pays`); the image is the same either way (a test compares).
+    pub light_reach_test: bool,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -266,6 +269,7 @@ impl Renderer {
         Ok(Renderer {
             scalar_lobes: false,
             cull_hidden_faces: true,
+            light_reach_test: true,
             seed: 0,
             passes: Some(passes),
             env: None,
@@ -594,6 +598,7 @@ impl Renderer {
                         key,
                         lights,
                         points,
+                        reach: self.light_reach_test && lights && !points && lobe::reach_test_pays(material, l),
                         ..lobe::Variant::of(material, l, prefilter)
                     },
                 )
