@@ -6,11 +6,13 @@
 //! dropped (or *Open…*ed) `.exr`/`.hdr`, mesh or `.brdf.json` file is loaded.
 //!
 //! The layout: `handler` turns winit events into [`state::Input`]s, which [`state::State`] handles
-//! (`--replay` feeds the same inputs from a strokes file); this module decides per frame what must
-//! be re-rendered (generation counters of the material, camera, light and environment) and runs the
-//! tool panel; `view` renders, composes and presents on the GPU with frames in flight; `recovery`
-//! keeps unsaved work; `stats` records frame times.
+//! (`--replay` feeds the same inputs from a strokes file); this module owns the session (window,
+//! scene, history, scripted steps, dropped files); `frame` decides per frame what must be re-rendered
+//! (generation counters of the material, camera, light and environment) and runs the tool panel;
+//! `view` renders, composes and presents on the GPU with frames in flight; `recovery` keeps unsaved
+//! work; `stats` records frame times.
 
+mod frame;
 pub mod graph;
 pub mod handler;
 pub mod lighting;
@@ -34,36 +36,17 @@ use winit::window::Window;
 use crate::brdf::Material;
 use crate::brush::{Settings, Strokes};
 use crate::error::{Error, Result};
-use crate::render::compose::Placement;
-use crate::render::{Estimator, Progress, View};
 use crate::scene::{Environment, Mesh};
 
+use frame::{CanvasKey, MeshKey};
 use recovery::keep_recovery;
 pub use recovery::{recovery_path, save_recovery};
 use state::{Input, Layout, State};
 use stats::{FrameKind, FrameStat};
-use view::{Gpu, Plan, Shown};
+use view::Gpu;
 
 use lighting::{light_from, EnvSummary};
 pub use options::{check_size, clamp_to_display, Options, MAX_WINDOW_SIDE};
-
-/// What the mesh view was last rendered for: any change restarts it (an interaction frame).
-#[derive(Clone, Debug, PartialEq)]
-struct MeshKey {
-    material: u64,
-    scene: u64,
-    orbit: [f64; 4],
-    size: (u32, u32),
-    spp: u32,
-}
-
-/// What the canvas was last rendered for.
-#[derive(Clone, Debug, PartialEq)]
-struct CanvasKey {
-    material: u64,
-    light: [f64; 4],
-    side: u32,
-}
 
 struct App {
     opts: Options,
@@ -311,162 +294,6 @@ impl App {
             }
             self.timings = passes;
         }
-    }
-
-    /// What this frame renders: the mesh view restarts (any change of what it shows), refines
-    /// (nothing changed, refinement on and not done) or stays; the canvas re-renders only when the
-    /// material or its light changed. Returns the frame's kind, `None` when nothing was presented.
-    fn draw_frame(&mut self) -> Result<Option<FrameKind>> {
-        let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(None) };
-        let Some((w, h)) = gpu.swapchain_extent()? else { return Ok(None) }; // minimised
-        if (state.layout.width, state.layout.height) != (w, h) {
-            state.handle(Input::Resized(w, h));
-        }
-        let l = state.layout;
-        // The canvas light follows the environment's brightest direction seen from the orbiting
-        // camera, unless the user moved it (a replay keeps its strokes file's light).
-        if !state.light_moved && self.replay.is_none() {
-            state.default_light = light_from(&self.env_summary, &state.camera());
-            state.settings.canvas.light = state.default_light;
-        }
-        let generation = state.history.generation();
-        let light = state.settings.canvas.light;
-        let mesh_settings = crate::render::Settings {
-            width: l.mesh_w,
-            height: l.height,
-            spp: self.spp,
-            estimator: Estimator::Key,
-            view: View::Mesh,
-            camera: state.camera(),
-            light,
-            intensity: state.settings.canvas.intensity,
-        };
-        let mesh_key = MeshKey {
-            material: generation,
-            scene: self.scene_generation,
-            orbit: [state.yaw, state.pitch, state.distance, state.fov_deg],
-            size: (l.mesh_w, l.height),
-            spp: self.spp,
-        };
-        let canvas_key = CanvasKey {
-            material: generation,
-            light: [light.x, light.y, light.z, state.settings.canvas.intensity],
-            side: l.canvas,
-        };
-        let refining = !self.opts.quit || self.opts.converge;
-        let refined = gpu.renderer.refined_samples();
-        let (mesh, kind) = if self.mesh_key.as_ref() != Some(&mesh_key) || (!refining && refined > 0) {
-            (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Interaction)
-        } else if refining && refined < REFINE_MAX {
-            let mis = crate::render::Settings { estimator: Estimator::Mis, spp: REFINE_STEP, ..mesh_settings.clone() };
-            (Some((mis, Progress::Refine)), FrameKind::Refinement)
-        } else {
-            (None, FrameKind::Unchanged)
-        };
-        let canvas = (self.canvas_key.as_ref() != Some(&canvas_key)).then(|| crate::render::Settings {
-            width: l.canvas,
-            height: l.canvas,
-            view: View::Canvas,
-            ..mesh_settings.clone()
-        });
-        let m = state.material().clone();
-        if self.curves.as_ref().is_none_or(|c| c.0 != canvas_key) {
-            self.curves = Some((canvas_key.clone(), graph::Curves::new(&m, light)));
-        }
-        let placement = Placement {
-            mesh: (l.mesh_x, l.mesh_w, l.height),
-            canvas: (l.canvas_x, l.canvas),
-            mesh_scale: (state.exposure * self.env_summary.exposure) as f32,
-            canvas_scale: state.exposure as f32,
-            marker: state.settings.canvas.mirror_point().map(|(cu, cv)| {
-                let (x, y) = l.canvas_point(cu, cv);
-                (x as f32, y as f32)
-            }),
-        };
-        // The tool panel and the graph: egui on this frame's input; what the user did is applied after.
-        let proxy = self.proxy.clone();
-        let worker = self.report.get_or_insert_with(|| {
-            report::ReportWorker::new(move || {
-                // After the loop has closed nobody needs the report: the error is the answer.
-                let _ = proxy.send_event(());
-            })
-        });
-        worker.request(&m);
-        let report = worker.latest(&m);
-        let shown_refined = if kind == FrameKind::Refinement {
-            refined + REFINE_STEP
-        } else if kind == FrameKind::Interaction {
-            0
-        } else {
-            refined
-        };
-        let quality = if shown_refined == 0 {
-            format!("mesh view: key {} spp", self.spp)
-        } else {
-            format!("mesh view: mis {shown_refined} spp")
-        };
-        let mut spp = self.spp;
-        let (mut exposure, mut log_graph) = (state.exposure, state.log_graph);
-        let egui_state = self.egui_state.as_mut().expect("made in init");
-        let raw_input = egui_state.take_egui_input(&gpu.window);
-        let info = panel::Info {
-            brush: state.brush,
-            split: state.settings.split_lobes,
-            report: report.map(|r| r.0),
-            report_updating: report.is_none_or(|r| !r.1),
-            timings: &self.timings,
-            quality: &quality,
-            frame_ms: (self.frame_ms.len() >= 2).then(|| {
-                let recent = &self.frame_ms[self.frame_ms.len().saturating_sub(FRAME_RATE_WINDOW)..];
-                (crate::measure::stats(recent).0, recent.len())
-            }),
-            status: &state.status,
-        };
-        let mut actions = panel::Actions::default();
-        let curves = &self.curves.as_ref().expect("made above").1;
-        let dialog = &mut self.dialog;
-        let output = self.egui_ctx.run(raw_input, |ctx| {
-            actions = panel::show(ctx, &m, &info, &mut spp, &mut exposure, &mut log_graph);
-            panel::dialog(ctx, dialog, &mut actions);
-            let ppp = ctx.pixels_per_point();
-            let rect = egui::Rect::from_min_max(
-                egui::pos2(l.canvas_x as f32 / ppp, l.graph_y.min(l.height) as f32 / ppp),
-                egui::pos2(l.width as f32 / ppp, l.height as f32 / ppp),
-            );
-            curves.paint(&ctx.layer_painter(egui::LayerId::background()), rect, log_graph);
-        });
-        egui_state.handle_platform_output(&gpu.window, output.platform_output);
-        let primitives = self.egui_ctx.tessellate(output.shapes, output.pixels_per_point);
-        self.spp = spp.max(1);
-        (state.exposure, state.log_graph) = (exposure, log_graph);
-        gpu.window.set_title(&format!("brdf-shop — {} — {quality} — {}", state.brush.name(), state.status));
-        let capture = self.opts.screenshot.is_some() && self.done;
-        let plan = Plan {
-            material: &m,
-            mesh,
-            canvas,
-            placement,
-            ui: (&output.textures_delta, &primitives, output.pixels_per_point),
-            capture,
-        };
-        let shown = gpu.frame(&plan)?;
-        let presented = match shown {
-            Shown::Presented(pixels) => {
-                self.mesh_key = Some(mesh_key);
-                self.canvas_key = Some(canvas_key);
-                if pixels.is_some() {
-                    self.captured = pixels;
-                }
-                self.shown = true;
-                true
-            }
-            Shown::OutOfDate => {
-                gpu.window.request_redraw();
-                false
-            }
-        };
-        self.apply_panel(actions)?;
-        Ok(presented.then_some(kind))
     }
 
     /// Turns the panel's actions into state changes (material edits become history steps).

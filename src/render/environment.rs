@@ -77,7 +77,6 @@ pub struct GpuKeyLights {
     pub points: Buffer,
     /// The lights, as detected.
     pub lights: Vec<keylight::KeyLight>,
-    pub count: u32,
 }
 
 /// What the renderer decided about a map's key lights (reported by `render --timings` and `report`).
@@ -253,8 +252,8 @@ impl GpuKeyLights {
             Ok(b) => b,
             Err(_) => unreachable!("the closure pushed three buffers before succeeding"),
         };
-        let (lights, count) = (keys.lights.clone(), keys.lights.len() as u32);
-        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, count })
+        let lights = keys.lights.clone();
+        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, points, lights })
     }
 
     fn destroy(self, ctx: &Context) {

@@ -1,0 +1,251 @@
+//! Recording a frame: which passes a view needs (the lobes with non-zero albedo, their variants, the
+//! key lights' samples or points), in order into the current frame of the ring, each timed; and the
+//! compose pass that places both views in the window image.
+
+use ash::vk;
+
+use super::environment::GpuEnvironment;
+use super::gpu::{self, Push};
+use super::targets::Targets;
+use super::{compose, key_light_samples, lobe, Estimator, Progress, Renderer, Settings, View, MAX_SPP};
+use crate::brdf::Material;
+use crate::error::{Error, Result};
+use crate::scene::Camera;
+use crate::vk::descriptor::{self, Binding};
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{barrier, Context};
+
+/// What a pass records with: the command buffer, this frame's descriptor pool, the shared push
+/// constants, the targets and the environment.
+pub struct Recording<'a> {
+    pub ctx: &'a Context,
+    pub cmd: vk::CommandBuffer,
+    pub pool: vk::DescriptorPool,
+    pub push: Push,
+    pub targets: &'a Targets,
+    pub env: Option<&'a GpuEnvironment>,
+}
+
+impl Recording<'_> {
+    pub fn env(&self) -> Result<&GpuEnvironment> {
+        self.env.ok_or_else(|| Error::input("render", "a mesh view needs an environment map (--env)"))
+    }
+
+    /// A descriptor set of `pipeline`'s layout pointing at `bindings`.
+    pub fn set(&self, pipeline: &Pipeline, bindings: &[Binding<'_>]) -> Result<vk::DescriptorSet> {
+        let set = descriptor::allocate(self.ctx, self.pool, pipeline.set_layout)?;
+        descriptor::write(self.ctx, set, bindings);
+        Ok(set)
+    }
+
+    /// Dispatches 8×8 groups over the image, then orders the accumulation image's writes before the
+    /// next pass's reads and writes.
+    pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+        pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
+        let (w, h) = (self.targets.width, self.targets.height);
+        // SAFETY: `cmd` is recording with a compute pipeline bound.
+        unsafe { self.ctx.raw().cmd_dispatch(self.cmd, w.div_ceil(8), h.div_ceil(8), 1) };
+        crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
+    }
+}
+
+/// The camera's basis for `camera_ray` in `pass.glsl`.
+fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
+    let forward = (camera.target - camera.eye).normalize();
+    let right = forward.cross(camera.up).normalize();
+    let up = right.cross(forward);
+    let t = (camera.fov_deg.to_radians() / 2.0).tan();
+    let aspect = width as f64 / height as f64;
+    push.eye = gpu::vec4(camera.eye, 1.0);
+    push.right = gpu::vec4(right * t * aspect, 0.0);
+    push.up = gpu::vec4(up * t, 0.0);
+    push.forward = gpu::vec4(forward, 0.0);
+}
+
+impl Renderer {
+    /// Records, into the current frame, the composed window image `window`: the mesh view (the
+    /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
+    /// says (its `mesh_scale` is multiplied by 1 / frames here).
+    pub fn record_compose(&mut self, window: &crate::vk::Image, placement: &compose::Placement) -> Result<()> {
+        let (Some(mesh), Some(canvas)) =
+            (self.views[View::Mesh as usize].as_ref(), self.views[View::Canvas as usize].as_ref())
+        else {
+            return Err(Error::Validation("compose before both views were rendered".into()));
+        };
+        let (image, frames) = if self.refined > 0 { (&mesh.sum, self.refine_frames) } else { (&mesh.accum, 1) };
+        let p = compose::Placement { mesh_scale: placement.mesh_scale / frames.max(1) as f32, ..*placement };
+        let passes = self.passes.as_ref().expect("passes live until drop");
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let f = ring.current();
+        let (cmd, pool) = (f.cmd, f.pool);
+        f.timestamps.time(&self.ctx, cmd, "compose", || {
+            passes.compose.record(&self.ctx, cmd, pool, window, (image, &canvas.accum), &p)
+        })
+    }
+
+    /// Records one view of `material` into the current frame (begun by [`Renderer::begin_frame`]),
+    /// into that view's persistent targets. `Progress::Refine` adds `settings.spp` more `mis` samples
+    /// to the mesh view's running sum (continuing its sequence); `Fresh` restarts it.
+    pub fn record(&mut self, material: &Material, settings: &Settings, progress: Progress) -> Result<()> {
+        self.record_view(material, settings, progress, true)
+    }
+
+    /// [`Renderer::record`]; with `reuse`, a mesh view whose mesh, camera and size are unchanged keeps
+    /// its G-buffer (the headless `render` always rasterises: a frame of its own, timed whole).
+    pub(super) fn record_view(
+        &mut self,
+        material: &Material,
+        settings: &Settings,
+        progress: Progress,
+        reuse: bool,
+    ) -> Result<()> {
+        self.check_size(settings)?;
+        let refine = matches!(progress, Progress::Refine) && settings.view == View::Mesh;
+        if refine && settings.estimator != Estimator::Mis {
+            return Err(Error::Validation("refinement frames are mis frames".into()));
+        }
+        let offset = if refine { self.refined } else { 0 };
+        if refine && offset.saturating_add(settings.spp) > MAX_SPP {
+            return Err(Error::input(
+                "--spp",
+                format!("{} samples after {offset} is more than the limit of {MAX_SPP}", settings.spp),
+            ));
+        }
+        let (w, h) = (settings.width, settings.height);
+        let mesh_view = settings.view == View::Mesh;
+        if mesh_view && (self.env.is_none() || self.mesh.is_none()) {
+            return Err(Error::input("render", "a mesh view needs an environment and a mesh"));
+        }
+        let slot = settings.view as usize;
+        if self.views[slot].as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
+            self.idle()?;
+            if let Some(old) = self.views[slot].take() {
+                old.destroy(&self.ctx);
+            }
+            self.views[slot] = Some(Targets::new(&self.ctx, w, h)?);
+            if mesh_view {
+                self.refined = 0;
+            }
+        }
+        // Which lobes get a pass: non-zero albedo only.
+        let prefilter = matches!(settings.estimator, Estimator::Fis | Estimator::Key);
+        let key = settings.estimator == Estimator::Key;
+        let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
+        let lights = key_lights.is_some();
+        let lobes: Vec<(u32, lobe::Variant)> = material
+            .lobes
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
+            .map(|(i, l)| {
+                let points = key_lights
+                    .is_some_and(|k| crate::scene::keylight::quadrature_fits(&k.lights, l.alpha_x, l.alpha_y));
+                (
+                    i as u32,
+                    lobe::Variant {
+                        vec4: !self.scalar_lobes,
+                        key,
+                        lights,
+                        points,
+                        reach: self.light_reach_test && lights && !points && lobe::reach_test_pays(material, l),
+                        ..lobe::Variant::of(material, l, prefilter)
+                    },
+                )
+            })
+            .collect();
+        if mesh_view {
+            self.buffers_for(offset.saturating_add(settings.spp), settings.spp, settings.estimator)?;
+            if settings.estimator != Estimator::Mis {
+                let variants: Vec<_> = lobes.iter().map(|l| l.1).collect();
+                self.passes.as_mut().expect("passes live until drop").lobe.prepare(&self.ctx, &variants)?;
+            }
+        }
+        let ctx = &self.ctx;
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let mut light_counts = None;
+        let sampled = lobes.iter().any(|l| l.1.lights && !l.1.points);
+        if let (true, true, Some(keys)) = (mesh_view, sampled, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
+            let m = key_light_samples(settings.spp);
+            let samples = keys.frame_samples(m, self.seed);
+            ring.current().upload(ctx, "keylights.frame", bytemuck::cast_slice(&samples))?;
+            light_counts = Some((samples.len() as u32, [m as f32, keys.sampling.dark_samples(m) as f32]));
+        }
+        let frame = ring.current();
+        let (cmd, pool) = (frame.cmd, frame.pool);
+        let (ts, buffers) = frame.parts();
+        let material_buf = buffers.get("material").expect("written by begin_frame");
+        let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
+        let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
+        let light_points = key_lights.map(|k| (&k.points, 4 * k.lights.len() as u32, [0.0; 2]));
+        let passes = self.passes.as_ref().expect("passes live until drop");
+        // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
+        // the farthest point of the frustum in front of the near plane.
+        let (tx, ty) = settings.camera.half_extents(w, h);
+        let near_reach = crate::scene::camera::NEAR * (1.0 + tx * tx + ty * ty).sqrt();
+        let cull = self.cull_hidden_faces && settings.camera.eye.length() > 1.0 + near_reach;
+        let gbuffer_key = mesh_view.then(|| {
+            let mesh = self.mesh.as_ref().expect("checked above");
+            (mesh.key.clone(), settings.camera.clone(), cull)
+        });
+        let targets = self.views[slot].as_mut().expect("made above");
+        let raster = !reuse || targets.gbuffer_of != gbuffer_key;
+        if raster {
+            // Set again once the whole view is recorded (an error leaves nothing to reuse).
+            targets.gbuffer_of = None;
+        }
+        let targets = self.views[slot].as_ref().expect("made above");
+        let mut push = Push::default();
+        camera_push(&settings.camera, w, h, &mut push);
+        let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
+        push.size = [w, h, ew, eh];
+        push.light = gpu::vec4(settings.light, settings.intensity as f32);
+        let rec = Recording { ctx, cmd, pool, push, targets, env: self.env.as_ref() };
+        if !mesh_view {
+            return ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf));
+        }
+        let mesh = self.mesh.as_ref().expect("checked above");
+        let vp = settings.camera.view_proj(w, h);
+        if raster {
+            ts.time(ctx, cmd, "gbuffer", || {
+                passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
+                Ok(())
+            })?;
+        }
+        ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
+        match settings.estimator {
+            Estimator::Mis => {
+                let seq = &self.sequence.as_ref().expect("made above").1;
+                ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, offset, settings.spp, material_buf, seq))?;
+            }
+            Estimator::Fis | Estimator::Plain | Estimator::Key => {
+                if material.diffuse.iter().any(|&d| d != 0.0) {
+                    ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
+                }
+                let halton = &self.halton.as_ref().expect("made above").1;
+                for &(i, v) in &lobes {
+                    let name = format!("lobe{i}[{}]", v.tag());
+                    ts.time(ctx, cmd, &name, || {
+                        let job = lobe::Job {
+                            index: i,
+                            samples: settings.spp,
+                            seed: self.seed,
+                            material: material_buf,
+                            halton,
+                            light_samples: if v.points { light_points } else { light_samples },
+                        };
+                        passes.lobe.record(&rec, v, &job)
+                    })?;
+                }
+            }
+        }
+        if refine {
+            ts.time(ctx, cmd, "accumulate", || passes.accumulate.record(ctx, cmd, pool, targets, offset == 0))?;
+            self.refined = offset + settings.spp;
+            self.refine_frames = if offset == 0 { 1 } else { self.refine_frames + 1 };
+        } else {
+            self.refined = 0;
+        }
+        self.views[slot].as_mut().expect("made above").gbuffer_of = gbuffer_key;
+        Ok(())
+    }
+}

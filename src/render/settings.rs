@@ -1,0 +1,115 @@
+//! What a frame is asked for and what it returns: the estimator, the view, the size and sample
+//! limits, the settings, the frame, and how a mesh view frame relates to the ones before it.
+
+use glam::DVec3;
+
+use crate::error::Result;
+use crate::reference::Image;
+use crate::scene::Camera;
+use crate::vk::query::PassTime;
+
+/// How the specular part (or, for `mis`, the whole material) is estimated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Estimator {
+    /// The paper's: Halton BRDF sampling of each lobe reading the prefiltered environment.
+    Fis,
+    /// The same samples reading level 0 only.
+    Plain,
+    /// Environment and BRDF sampling combined by the balance heuristic, diffuse included.
+    Mis,
+    /// Issue 10's default: the map's key lights split off; each lobe pass integrates the residual map
+    /// (prefiltered, a Hammersley set shifted per frame, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe
+    /// under the lights (light and BRDF samples, balance heuristic, or the lights' quadrature points
+    /// for a lobe much wider than them); the diffuse pass takes the residual's SH9
+    /// and the lights as distant sources.
+    Key,
+}
+
+impl Estimator {
+    pub fn parse(s: &str) -> Option<Estimator> {
+        match s {
+            "fis" => Some(Estimator::Fis),
+            "plain" => Some(Estimator::Plain),
+            "mis" => Some(Estimator::Mis),
+            "key" => Some(Estimator::Key),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Fis => "fis",
+            Estimator::Plain => "plain",
+            Estimator::Mis => "mis",
+            Estimator::Key => "key",
+        }
+    }
+
+    /// Every estimator, the default first.
+    pub const ALL: [Estimator; 4] = [Estimator::Key, Estimator::Fis, Estimator::Plain, Estimator::Mis];
+
+    /// The names `--estimator` accepts, for messages: `key|fis|plain|mis`.
+    pub fn names() -> String {
+        Estimator::ALL.map(Estimator::name).join("|")
+    }
+}
+
+/// The light samples the `key` estimator's lobe passes take per pixel for `spp` BRDF samples per
+/// component.
+pub fn key_light_samples(spp: u32) -> u32 {
+    spp.max(1)
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    Mesh,
+    Canvas,
+}
+
+/// The most samples per pixel (per lobe for `fis`/`plain`, per pixel for `mis`) a frame takes. The
+/// sample tables are uploaded whole (16 bytes a sample for the lobe passes, 32 for `mis`, rounded
+/// up to a power of two) and `mis` records one dispatch per 32 samples: 65536 keeps the table at
+/// 2 MiB and a frame at 2048 dispatches, 16× the 4096 spp at which `mis` is converged to 1 %
+/// (README).
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// The most pixels a GPU frame has: 8192×4096 (twice 8K UHD). Every pixel costs 64 bytes of render
+/// targets, 16 of readback buffer and 16 of host image, so the largest frame needs about 2.7 GB
+/// (a frame of the device's largest image, 16384², would need 21 GB).
+pub const MAX_PIXELS: u64 = 8192 * 4096;
+
+/// Refuses (naming the flag) an image size or sample count beyond the limits, before anything is
+/// allocated: the sizes of [`Renderer::render`] and of `render`'s flags.
+pub fn check_limits(width: u32, height: u32, spp: u32) -> Result<()> {
+    crate::imageio::check_image_limits((width, height, spp), (MAX_PIXELS, MAX_SPP), "8192x4096", "a GPU frame")
+}
+
+/// What one frame renders.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel per lobe (`fis`, `plain`) or per pixel (`mis`).
+    pub spp: u32,
+    pub estimator: Estimator,
+    pub view: View,
+    pub camera: Camera,
+    /// The canvas light (unit) and its intensity.
+    pub light: DVec3,
+    pub intensity: f64,
+}
+
+/// A rendered frame: the linear image (alpha = coverage) and the GPU time of every pass that ran.
+pub struct Frame {
+    pub image: Image,
+    pub timings: Vec<PassTime>,
+}
+
+/// How a mesh view frame relates to the ones before it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    /// A new image (the refinement restarts).
+    Fresh,
+    /// More `mis` samples added to the running sum.
+    Refine,
+}
