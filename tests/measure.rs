@@ -24,7 +24,8 @@ fn renderer() -> Renderer {
 /// follow the triangle count: from 1 k to 100 k triangles of the same sphere the G-buffer pass grows
 /// tens of times while the lobe passes stay within a factor 3 (fastest of 3 frames each; the factor
 /// is a bound on the noise of lavapipe sharing 2 cores with the rest of the suite, not a speed target —
-/// alone they stay within 1.4).
+/// alone they stay within 1.4). The rows count their pixel-samples, and the device's peak is measured
+/// for the share of it the lobe passes reach.
 #[test]
 fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     let mut r = renderer();
@@ -61,8 +62,28 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
             .collect()
     };
     assert_eq!(names("vec4"), names("scalar"));
-    let text = bench::table(&rows, "test");
+    // Pixel-samples: the same covered pixels at the same size and spp, so 4 one-view lobes take 4×
+    // the samples of 1; the goal material's split rotated lobe counts twice (5 components), `mis`
+    // once per pixel and sample.
+    let one = rows.iter().find(|m| m.label == "1 lobes").expect("1 lobes");
+    assert!(one.pixel_samples > 0 && one.pixel_samples % 8 == 0, "{}", one.pixel_samples);
+    assert_eq!(four.pixel_samples, 4 * one.pixel_samples);
+    let goal = rows.iter().find(|m| m.group == "goal").expect("the goal row");
+    assert_eq!(goal.pixel_samples, 5 * one.pixel_samples, "{}", goal.label);
+    let mis = rows.iter().find(|m| m.label == "mis").expect("mis");
+    assert_eq!(mis.pixel_samples, one.pixel_samples);
+    // The peak is measured, and no lobe pass reaches it: lavapipe runs them at 3–10 % of it, so a
+    // share past 1 would mean a wrong peak or a flop count off more than tenfold.
+    let peak = bench::peak(&r, 3).expect("peak");
+    assert!(peak.is_finite() && peak > 0.0, "{peak}");
+    for m in rows.iter().filter(|m| m.ms("lobe") > 0.0) {
+        let share = m.share_of_peak(peak).expect("lobe rows have a share");
+        assert!(share > 0.0 && share < 1.0, "{}: {share} of {peak} GFLOP/s", m.label);
+        assert!(m.ns_per_sample() > 0.0);
+    }
+    let text = bench::table(&rows, "test", peak);
     assert!(text.lines().count() > rows.len(), "{text}");
+    assert!(text.contains("goal (issue 10"), "{text}");
 }
 
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is

@@ -31,8 +31,9 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     brdf_shop::measure::require_maps(&plan.hdri, &[bench::ENV])?;
     let mut r = renderer()?;
     brdf_shop::interrupt::install();
+    let peak = bench::peak(&r, plan.repeats)?;
     let rows = unless_interrupted(bench::run(&mut r, &plan, true))?;
-    print!("{}", bench::table(&rows, r.device_name()));
+    print!("{}", bench::table(&rows, r.device_name(), peak));
     let materials = vec![
         ("default".to_string(), brdf_shop::brush::strokes::default_material()?),
         ("8 lobes".to_string(), bench::material(8)),
@@ -41,7 +42,7 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     let viewer = unless_interrupted(viewer::run(&mut r, &plan.viewer_sizes, &materials, frames))?;
     print!("{}", viewer::table(&viewer, r.device_name()));
     if let Some(path) = json {
-        let mut doc = bench::json(&rows, r.device_name(), &plan);
+        let mut doc = bench::json(&rows, r.device_name(), &plan, peak);
         doc["viewer"] = viewer::json(&viewer);
         let text = serde_json::to_string_pretty(&doc).context("encoding JSON")? + "\n";
         brdf_shop::fsio::write_atomic(path, text.as_bytes())?;

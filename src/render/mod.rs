@@ -23,6 +23,7 @@ pub mod gpu;
 pub mod lobe;
 pub mod mesh;
 pub mod mis;
+pub mod peak;
 mod record;
 mod settings;
 pub mod targets;
