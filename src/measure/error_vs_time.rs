@@ -1,6 +1,7 @@
 //! `report error-vs-time`: for scenes (environment × material) and sample counts, each estimator's
-//! GPU time (timestamps, median of repeated frames; the shading passes, without the G-buffer and
-//! background that every estimator shares) and its error against the converged CPU reference
+//! GPU time (timestamps, median of repeated frames taken in rounds that interleave a scene's
+//! estimators and sample counts; the shading passes, without the G-buffer and background that every
+//! estimator shares) and its error against the converged CPU reference
 //! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
 //! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
 //! (log–log: the error–time frontier of each estimator) and `error-vs-time.md` (the default `key`
@@ -202,53 +203,62 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
                 b.set_message(format!("{env_name}/{mat_name}"));
             }
             let reference = cached_reference(&cache, m, &env, &mesh, &camera, plan.size, plan.reference_spp)?;
-            for estimator in Estimator::ALL {
-                for &spp in &plan.spps {
-                    // Ctrl-C (the CLI installs the handler): stop before the next measurement.
+            // Every (estimator, spp) of the scene: one frame first, not counted (drivers compile
+            // pipelines on first use; the frames of one configuration are the same image), then the
+            // timed rounds, interleaved, so that a slow spell of the machine falls on every
+            // configuration alike instead of on whichever ran then.
+            let configs: Vec<(Estimator, u32)> =
+                Estimator::ALL.iter().flat_map(|&e| plan.spps.iter().map(move |&spp| (e, spp))).collect();
+            let settings = |(estimator, spp): (Estimator, u32)| Settings {
+                width: plan.size,
+                height: plan.size,
+                spp,
+                estimator,
+                view: View::Mesh,
+                camera: camera.clone(),
+                light: glam::DVec3::Z,
+                intensity: 1.0,
+            };
+            let mut images = Vec::with_capacity(configs.len());
+            for &c in &configs {
+                // Ctrl-C (the CLI installs the handler): stop before the next measurement.
+                if crate::interrupt::requested() {
+                    return Err(Error::input("error-vs-time", "interrupted"));
+                }
+                images.push(renderer.render(m, &settings(c))?.image);
+            }
+            let mut times = vec![Vec::new(); configs.len()];
+            for _ in 0..plan.repeats.max(1) {
+                for (k, &c) in configs.iter().enumerate() {
                     if crate::interrupt::requested() {
                         return Err(Error::input("error-vs-time", "interrupted"));
                     }
-                    let s = Settings {
-                        width: plan.size,
-                        height: plan.size,
-                        spp,
-                        estimator,
-                        view: View::Mesh,
-                        camera: camera.clone(),
-                        light: glam::DVec3::Z,
-                        intensity: 1.0,
-                    };
-                    let mut times = Vec::new();
-                    // One frame first, not counted: drivers compile pipelines on first use.
-                    let mut image = Some(renderer.render(m, &s)?.image);
-                    for _ in 0..plan.repeats.max(1) {
-                        let frame = renderer.render(m, &s)?;
-                        times.push(
-                            frame
-                                .timings
-                                .iter()
-                                .filter(|t| t.name != "gbuffer" && t.name != "background")
-                                .map(|t| t.ms)
-                                .sum(),
-                        );
-                        image = Some(frame.image);
-                    }
-                    let image = image.expect("at least one frame");
-                    let (rel_l1, rmse, max_abs) = errors(&image, &reference);
-                    let (ms_median, ms_min, ms_max) = super::stats(&times);
-                    rows.push(Row {
-                        env: env_name.to_string(),
-                        material: mat_name.to_string(),
-                        estimator,
-                        spp,
-                        ms_median,
-                        ms_min,
-                        ms_max,
-                        rel_l1,
-                        rmse,
-                        max_abs,
-                    });
+                    let frame = renderer.render(m, &settings(c))?;
+                    times[k].push(
+                        frame
+                            .timings
+                            .iter()
+                            .filter(|t| t.name != "gbuffer" && t.name != "background")
+                            .map(|t| t.ms)
+                            .sum(),
+                    );
                 }
+            }
+            for (((estimator, spp), image), times) in configs.into_iter().zip(images).zip(times) {
+                let (rel_l1, rmse, max_abs) = errors(&image, &reference);
+                let (ms_median, ms_min, ms_max) = super::stats(&times);
+                rows.push(Row {
+                    env: env_name.to_string(),
+                    material: mat_name.to_string(),
+                    estimator,
+                    spp,
+                    ms_median,
+                    ms_min,
+                    ms_max,
+                    rel_l1,
+                    rmse,
+                    max_abs,
+                });
             }
             if let Some(b) = &bar {
                 b.inc(1);
@@ -341,7 +351,7 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
     scenes.dedup();
     let mut s = format!(
         "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
-         Error: relative L1 over the object. GPU ms: shading passes only (median of {2} frames).\n\n",
+         Error: relative L1 over the object. GPU ms: shading passes only (median of {2} frames, in rounds interleaving each scene's estimators and sample counts).\n\n",
         plan.size, plan.reference_spp, plan.repeats
     );
     s.push_str("## The default estimator (`key`)\n\n");
