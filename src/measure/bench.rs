@@ -103,8 +103,8 @@ impl Measurement {
     /// The share of `peak_gflops` the lobe passes reach at [`FLOPS_PER_SAMPLE`] a sample (none for
     /// `mis`, whose samples are another shader's).
     pub fn share_of_peak(&self, peak_gflops: f64) -> Option<f64> {
-        let ns = self.ms("lobe") * 1e6 / self.pixel_samples.max(1) as f64;
-        (self.ms("lobe") > 0.0 && peak_gflops > 0.0).then(|| FLOPS_PER_SAMPLE / ns / peak_gflops)
+        // A row with lobe passes has no `mis` pass, so `ns_per_sample` is the lobe passes' alone.
+        (self.ms("lobe") > 0.0 && peak_gflops > 0.0).then(|| FLOPS_PER_SAMPLE / self.ns_per_sample() / peak_gflops)
     }
 
     /// The summed minima of the passes whose names start with `prefix`.
@@ -149,12 +149,15 @@ fn pixel_samples(m: &Material, s: &Settings, covered: u64) -> u64 {
     if s.estimator == Estimator::Mis {
         return covered * u64::from(s.spp);
     }
-    let reversed = if m.is_symmetrized() { 2 } else { 1 };
+    // The components the lobe pass samples: its variant's split views and symmetrised reversed terms.
     let components: u64 = m
         .lobes
         .iter()
         .filter(|l| l.albedo.iter().any(|&a| a != 0.0))
-        .map(|l| if l.split && l.is_rotated() { 2 } else { 1 } * reversed)
+        .map(|l| {
+            let v = crate::render::lobe::Variant::of(m, l, true);
+            (1 + u64::from(v.split)) * (1 + u64::from(v.sym))
+        })
         .sum();
     covered * u64::from(s.spp) * components
 }
