@@ -5,8 +5,10 @@
 // QMC sequence (Halton, bases 2, 3, 5, 7, 11 from index 1) is Cranley–Patterson rotated per pixel.
 // Dispatched in chunks of samples; each chunk adds its share of the mean.
 #extension GL_GOOGLE_include_directive : require
+#define PIXELS_BINDING 9
 #include "pass.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+// Over the list of shaded pixels (compact.comp).
+layout(local_size_x = 64) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
 layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
 layout(set = 0, binding = 2, rgba32f) uniform image2D accum;
@@ -25,13 +27,11 @@ layout(std430, set = 0, binding = 8) readonly buffer EnvPdf { float v[]; } env_p
 #include "env.glsl"
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (!inside(p)) return;
-    vec4 P = imageLoad(gpos, p);
-    if (P.w < 0.5) return;
-    Frame f = frame_from_normal(normalize(imageLoad(gnrm, p).xyz));
-    vec3 wo = to_local(f, normalize(pc.eye.xyz - P.xyz));
-    if (wo.z <= 0.0) return;
+    ivec2 p;
+    if (!listed_pixel(p)) return;
+    Frame f;
+    vec3 wo;
+    if (!shaded(imageLoad(gpos, p), imageLoad(gnrm, p).xyz, f, wo)) return;
     uint pixel = uint(p.y) * pc.size.x + uint(p.x);
     vec4 rot0 = vec4(hash_unit(pixel * 5u), hash_unit(pixel * 5u + 1u), hash_unit(pixel * 5u + 2u), 0.0);
     vec2 rot1 = vec2(hash_unit(pixel * 5u + 3u), hash_unit(pixel * 5u + 4u));

@@ -1,5 +1,14 @@
 // The push constants every compute pass shares (128 bytes, the guaranteed minimum), and the
 // G-buffer access of the mesh passes.
+//
+// Loops and branches on llvmpipe (Mesa 22.3, the machine every test runs on), which shape these
+// shaders: an `if` is not a branch there. Both sides run for every 8-lane vector under an execution
+// mask, and an early `return` only masks what follows. A loop is the one real branch: its body
+// always runs once, and it goes round again while any lane is still active. So a `for (i < n)` loop
+// costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here are
+// do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2 bodies,
+// identical images). Code that only some samples need costs its full price in every sample unless
+// it sits in a loop whose count is 0 for most vectors.
 #ifndef PASS_GLSL
 #define PASS_GLSL
 #include "common.glsl"
@@ -22,5 +31,28 @@ vec3 camera_ray(ivec2 p) {
 }
 
 bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
+
+// Whether a G-buffer texel (P, its position with the coverage flag; n, its normal) holds the mesh
+// facing the eye, with its shading frame and ω_o (local): the pixels the mesh passes shade, and the
+// pixels `compact.comp` lists.
+bool shaded(vec4 P, vec3 n, out Frame f, out vec3 wo) {
+    f = frame_from_normal(normalize(n));
+    wo = to_local(f, normalize(pc.eye.xyz - P.xyz));
+    return P.w >= 0.5 && wo.z > 0.0;
+}
+
+#ifdef PIXELS_BINDING
+// The list `compact.comp` made, dispatched over in groups of 64 (`Recording::dispatch_listed`).
+layout(std430, set = 0, binding = PIXELS_BINDING) readonly buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
+
+// This invocation's pixel of the list; false past its end.
+bool listed_pixel(out ivec2 p) {
+    uint count = pixels.count;
+    uint i = gl_GlobalInvocationID.x;
+    uint packed = pixels.at[min(i, max(count, 1u) - 1u)];
+    p = ivec2(packed & 0xffffu, packed >> 16);
+    return i < count;
+}
+#endif
 
 #endif

@@ -13,7 +13,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 9] = [
+const BINDINGS: [vk::DescriptorType; 10] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
@@ -21,6 +21,7 @@ const BINDINGS: [vk::DescriptorType; 9] = [
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
@@ -201,12 +202,13 @@ impl LobePass {
                 Binding::Sampled(texels.view, env.sampler),
                 Binding::Storage(cones),
                 Binding::Storage(samples_buf),
+                Binding::Storage(&t.pixels),
             ],
         )?;
         let mut push = rec.push;
         push.params = [index, samples, seed, m];
         push.fparams = [KEY_LOD_BIAS, 0.0, counts[0], counts[1]];
-        rec.dispatch(pipeline, set, &push);
+        rec.dispatch_listed(pipeline, set, &push);
         Ok(())
     }
 

@@ -13,11 +13,12 @@ use crate::Result;
 /// Samples per dispatch.
 pub const CHUNK: u32 = 32;
 
-const BINDINGS: [vk::DescriptorType; 9] = [
+const BINDINGS: [vk::DescriptorType; 10] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -58,6 +59,7 @@ impl MisPass {
                 Binding::Storage(&env.marginal),
                 Binding::Storage(&env.conditional),
                 Binding::Storage(&env.pdf),
+                Binding::Storage(&t.pixels),
             ],
         )?;
         let (mut at, end) = (first, first + samples);
@@ -66,7 +68,7 @@ impl MisPass {
             let mut push = rec.push;
             push.params = [0, count, at, samples];
             push.fparams[3] = 1.0 / samples as f32;
-            rec.dispatch(&self.pipeline, set, &push);
+            rec.dispatch_listed(&self.pipeline, set, &push);
             at += count;
         }
         Ok(())

@@ -14,6 +14,7 @@
 pub mod accumulate;
 pub mod background;
 pub mod canvas;
+pub mod compact;
 pub mod compose;
 pub mod diffuse;
 pub mod environment;
@@ -48,6 +49,7 @@ pub use settings::{check_limits, key_light_samples, Estimator, Frame, Progress, 
 struct Passes {
     gbuffer: gbuffer::GBufferPass,
     background: background::BackgroundPass,
+    compact: compact::CompactPass,
     diffuse: diffuse::DiffusePass,
     lobe: lobe::LobePass,
     mis: mis::MisPass,
@@ -62,6 +64,7 @@ impl Passes {
         Ok(Passes {
             gbuffer: gbuffer::GBufferPass::new(ctx)?,
             background: background::BackgroundPass::new(ctx)?,
+            compact: compact::CompactPass::new(ctx)?,
             diffuse: diffuse::DiffusePass::new(ctx)?,
             lobe: lobe::LobePass::new(),
             mis: mis::MisPass::new(ctx)?,
@@ -75,6 +78,7 @@ impl Passes {
     fn destroy(self, ctx: &Context) {
         self.gbuffer.destroy(ctx);
         self.background.destroy(ctx);
+        self.compact.destroy(ctx);
         self.diffuse.destroy(ctx);
         self.lobe.destroy(ctx);
         self.mis.destroy(ctx);

@@ -7,7 +7,7 @@ use ash::vk;
 use super::environment::GpuEnvironment;
 use super::gpu::{self, Push};
 use super::targets::Targets;
-use super::{compose, key_light_samples, lobe, Estimator, Progress, Renderer, Settings, View, MAX_SPP};
+use super::{compact, compose, key_light_samples, lobe, Estimator, Progress, Renderer, Settings, View, MAX_SPP};
 use crate::brdf::Material;
 use crate::error::{Error, Result};
 use crate::scene::Camera;
@@ -45,6 +45,16 @@ impl Recording<'_> {
         let (w, h) = (self.targets.width, self.targets.height);
         // SAFETY: `cmd` is recording with a compute pipeline bound.
         unsafe { self.ctx.raw().cmd_dispatch(self.cmd, w.div_ceil(8), h.div_ceil(8), 1) };
+        crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
+    }
+
+    /// Dispatches groups of [`compact::GROUP`] over the targets' list of shaded pixels (as many as
+    /// `compact.comp` wrote into its header), then orders the accumulation image as [`Self::dispatch`].
+    pub fn dispatch_listed(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+        pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
+        // SAFETY: `cmd` is recording with a compute pipeline bound; the list buffer has INDIRECT_BUFFER
+        // usage and its header, written by the compact pass of this G-buffer, holds the groups.
+        unsafe { self.ctx.raw().cmd_dispatch_indirect(self.cmd, self.targets.pixels.raw, compact::GROUPS_OFFSET) };
         crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 }
@@ -206,9 +216,10 @@ impl Renderer {
         let mesh = self.mesh.as_ref().expect("checked above");
         let vp = settings.camera.view_proj(w, h);
         if raster {
+            // The list of shaded pixels belongs to the G-buffer: built with it, timed with it.
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
-                Ok(())
+                passes.compact.record(&rec)
             })?;
         }
         ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;

@@ -4,7 +4,7 @@
 
 use ash::vk;
 
-use crate::vk::{barrier, Context, Image};
+use crate::vk::{barrier, Buffer, Context, Image};
 use crate::Result;
 
 pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -19,6 +19,9 @@ pub struct Targets {
     pub accum: Image,
     /// The running sum of progressive refinement frames (see `accumulate`).
     pub sum: Image,
+    /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
+    /// run over it).
+    pub pixels: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
 }
@@ -65,6 +68,15 @@ impl Targets {
             }
             return Err(e);
         }
+        let pixels = match super::compact::list_buffer(ctx, width, height) {
+            Ok(b) => b,
+            Err(e) => {
+                for i in made {
+                    i.destroy(ctx);
+                }
+                return Err(e);
+            }
+        };
         let mut it = made.into_iter();
         let mut next = || it.next().expect("five images were made");
         Ok(Targets {
@@ -75,6 +87,7 @@ impl Targets {
             depth: next(),
             accum: next(),
             sum: next(),
+            pixels,
             gbuffer_of: None,
         })
     }
@@ -89,5 +102,6 @@ impl Targets {
         for i in [self.position, self.normal, self.depth, self.accum, self.sum] {
             i.destroy(ctx);
         }
+        self.pixels.destroy(ctx);
     }
 }

@@ -56,7 +56,7 @@ pub fn candidates(instance: &Instance) -> Result<Vec<Candidate>> {
                 instance.raw.get_physical_device_queue_family_properties(physical),
             )
         };
-        if props.api_version < vk::API_VERSION_1_3 {
+        if props.api_version < vk::API_VERSION_1_3 || !ballot_in_compute(instance, physical) {
             continue;
         }
         let want = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
@@ -79,6 +79,17 @@ pub fn candidates(instance: &Instance) -> Result<Vec<Candidate>> {
     Ok(out)
 }
 
+/// Whether compute shaders may use subgroup ballots (`compact.comp` appends a subgroup's pixels with
+/// one atomic); desktop Vulkan drivers and lavapipe all do.
+fn ballot_in_compute(instance: &Instance, physical: vk::PhysicalDevice) -> bool {
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    // SAFETY: `physical` came from this instance, a Vulkan 1.3 instance; `props` outlives the call.
+    unsafe { instance.raw.get_physical_device_properties2(physical, &mut props) };
+    subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+        && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT)
+}
+
 fn bytemuck_name(name: &[std::ffi::c_char]) -> &[u8] {
     // SAFETY: `c_char` and `u8` have the same size and alignment; the slice covers the same bytes.
     unsafe { std::slice::from_raw_parts(name.as_ptr().cast::<u8>(), name.len()) }
@@ -98,7 +109,7 @@ impl Device {
                 Error::NoDevice(format!("no Vulkan device named like \"{f}\" (found: {})", names.join(", ")))
             })?,
             None => all.first().ok_or_else(|| {
-                Error::NoDevice("no Vulkan 1.3 device found; run tools/setup to install Mesa lavapipe".into())
+                Error::NoDevice("no Vulkan 1.3 device with subgroup ballots in compute shaders found; run tools/setup to install Mesa lavapipe".into())
             })?,
         };
         let priorities = [1.0f32];

@@ -1,0 +1,86 @@
+//! The list of the mesh view's shaded pixels (`compact.comp`), built once per G-buffer: the lobe and
+//! `mis` passes are dispatched over it instead of over the image, so no vector of lanes is spent on
+//! pixels off the mesh (on llvmpipe those still ran one round of every loop). Images are unchanged.
+
+use ash::vk;
+
+use super::Recording;
+use crate::vk::descriptor::Binding;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{barrier, Buffer, Context};
+use crate::Result;
+
+const BINDINGS: [vk::DescriptorType; 3] =
+    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
+
+/// Invocations per group of the passes dispatched over the list (their `local_size_x`).
+pub const GROUP: u32 = 64;
+
+/// The bytes before the list: the count, then the groups of `vkCmdDispatchIndirect` (x, y, z).
+pub const HEADER: u64 = 16;
+
+/// Where in the list buffer the indirect dispatch's groups are.
+pub const GROUPS_OFFSET: u64 = 4;
+
+/// The list buffer for a `width` × `height` view: the header and one `u32` per pixel.
+pub fn list_buffer(ctx: &Context, width: u32, height: u32) -> Result<Buffer> {
+    Buffer::new(
+        ctx,
+        HEADER + 4 * u64::from(width) * u64::from(height),
+        vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuOnly,
+        "pixels",
+    )
+}
+
+/// What reads the list: the indirect dispatches and the shaders of the passes over it.
+pub const LIST_READ: barrier::Scope = (
+    vk::PipelineStageFlags2::from_raw(
+        vk::PipelineStageFlags2::DRAW_INDIRECT.as_raw() | vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw(),
+    ),
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::INDIRECT_COMMAND_READ.as_raw() | vk::AccessFlags2::SHADER_STORAGE_READ.as_raw(),
+    ),
+);
+
+pub struct CompactPass {
+    pipeline: Pipeline,
+}
+
+impl CompactPass {
+    pub fn new(ctx: &Context) -> Result<CompactPass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("compact.comp"), "compact", &BINDINGS, 128, &[])?;
+        Ok(CompactPass { pipeline })
+    }
+
+    /// Rebuilds the list of `rec.targets` from its G-buffer (after the G-buffer pass).
+    pub fn record(&self, rec: &Recording<'_>) -> Result<()> {
+        let (ctx, cmd, t) = (rec.ctx, rec.cmd, rec.targets);
+        let set = rec.set(
+            &self.pipeline,
+            &[
+                Binding::StorageImage(t.position.view),
+                Binding::StorageImage(t.normal.view),
+                Binding::Storage(&t.pixels),
+            ],
+        )?;
+        // The previous list's readers (an earlier frame may still be in flight) before the reset.
+        barrier::memory(ctx, cmd, (LIST_READ.0, vk::AccessFlags2::NONE), barrier::TRANSFER_WRITE);
+        let header: [u32; 4] = [0, 0, 1, 1];
+        // SAFETY: `cmd` is recording; the buffer is live and has TRANSFER_DST usage; 16 bytes, a
+        // multiple of 4 at offset 0.
+        unsafe { ctx.raw().cmd_update_buffer(cmd, t.pixels.raw, 0, bytemuck::cast_slice(&header)) };
+        barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
+        self.pipeline.bind(ctx, cmd, set, bytemuck::bytes_of(&rec.push));
+        // SAFETY: `cmd` is recording with the compute pipeline bound.
+        unsafe { ctx.raw().cmd_dispatch(cmd, t.width.div_ceil(8), t.height.div_ceil(8), 1) };
+        barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}
