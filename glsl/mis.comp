@@ -39,7 +39,9 @@ void main() {
     float total = mixture_total(wo, w_diffuse);
     vec3 sum = vec3(0.0);
     uint first = pc.params.z, count = pc.params.y;
-    for (uint s = first; s < first + count; s++) {
+    // A do-while: a dispatch has at least one sample (pass.glsl's note on loops).
+    uint s = first;
+    do {
         vec4 a = fract(qmc.v[2u * s] + rot0);
         vec2 e = fract(qmc.v[2u * s + 1u].xy + rot1);
         // Environment sample.
@@ -64,7 +66,7 @@ void main() {
                 if (all(lessThan(abs(c), vec3(3e38)))) sum += c;
             }
         }
-    }
+    } while (++s < first + count);
     vec4 acc = imageLoad(accum, p);
     acc.rgb += sum * pc.fparams.w;
     imageStore(accum, p, acc);

@@ -3,6 +3,9 @@
 // symmetrisation, the reciprocal facet form, Walter's pdf and Ward's half-vector sampling, and the
 // one-sample mixture sampler of `src/brdf/sampling.rs`.
 //
+// Loops over lobes and views are do-while loops behind a count check: the same on a GPU, and on
+// llvmpipe a `for` loop runs one body more than it needs (glsl/include/pass.glsl's note on loops).
+//
 // Self-contained: it reads the material only through the five accessors declared below, which the
 // includer defines (after this file): `material.glsl` from the renderer's storage buffer, the files
 // `brdf-shop export --format glsl|brdf-explorer` writes from constants or uniforms. So the renderer and
@@ -98,11 +101,12 @@ vec3 material_eval(vec3 wi, vec3 wo) {
     if (!(wi.z > 0.0 && wo.z > 0.0)) return vec3(0.0);
     vec3 f = brdf_diffuse().rgb / PI;
     bool sym = brdf_symmetrize();
-    for (uint k = 0u; k < brdf_lobe_count(); k++) {
+    uint count = brdf_lobe_count(), k = 0u;
+    if (count > 0u) do {
         float t = lobe_one_way(k, wi, wo);
         if (sym) t = 0.5 * (t + lobe_one_way(k, wo, wi));
         f += brdf_lobe(k).albedo.rgb * t;
-    }
+    } while (++k < count);
     return f;
 }
 
@@ -141,16 +145,18 @@ float pdf_lobe(vec4 shape, vec3 b, vec3 wi) {
 float mixture_total(vec3 wo, out float w_diffuse) {
     bool sym = brdf_symmetrize();
     float total = 0.0;
-    for (uint k = 0u; k < brdf_lobe_count(); k++) {
+    uint count = brdf_lobe_count(), k = 0u;
+    if (count > 0u) do {
         GpuLobe l = brdf_lobe(k);
         uint n = l.flags.x != 0u ? 2u : 1u;
         float w = l.albedo.w * (sym ? 0.5 : 1.0) / float(n);
-        for (uint j = 0u; j < n; j++) {
+        uint j = 0u;
+        do {
             vec4 q = j == 0u ? l.rotation : quat_conjugate(l.rotation);
             if (brdf_form() == 2u || quat_rotate(q, wo).z > 0.0) total += w;
             if (sym) total += w;
-        }
-    }
+        } while (++j < n);
+    } while (++k < count);
     w_diffuse = 0.0;
     if (brdf_diffuse().w > 0.0 || total <= 0.0) w_diffuse = max(brdf_diffuse().w, 1e-3);
     return total + w_diffuse;
@@ -162,30 +168,32 @@ float mixture_total(vec3 wo, out float w_diffuse) {
 float lobe_pdf_sum(GpuLobe l, uint form, bool sym, vec3 wo, vec3 wi) {
     uint n = l.flags.x != 0u ? 2u : 1u;
     float p = 0.0;
-    for (uint j = 0u; j < n; j++) {
+    uint j = 0u;
+    do {
         vec4 q = j == 0u ? l.rotation : quat_conjugate(l.rotation);
         if (form == 2u) {
             // Facet frame q: Walter's pdf of q⁻¹ wi about q⁻¹ wo.
             vec4 qi = quat_conjugate(q);
             p += pdf_lobe(l.shape, quat_rotate(qi, wo), quat_rotate(qi, wi));
-            continue;
+        } else {
+            vec3 b = quat_rotate(q, wo);
+            if (b.z > 0.0) p += pdf_lobe(l.shape, b, wi);
+            // Reverse term: x = R wi drawn about wo (j = 1: x = R⁻¹ wi).
+            if (sym) p += pdf_lobe(l.shape, wo, quat_rotate(q, wi));
         }
-        vec3 b = quat_rotate(q, wo);
-        if (b.z > 0.0) p += pdf_lobe(l.shape, b, wi);
-        // Reverse term: x = R wi drawn about wo (j = 1: x = R⁻¹ wi).
-        if (sym) p += pdf_lobe(l.shape, wo, quat_rotate(q, wi));
-    }
+    } while (++j < n);
     return p;
 }
 
 float mixture_pdf(vec3 wo, vec3 wi, float total, float w_diffuse) {
     bool sym = brdf_symmetrize();
     float p = w_diffuse * max(wi.z, 0.0) / PI;
-    for (uint k = 0u; k < brdf_lobe_count(); k++) {
+    uint count = brdf_lobe_count(), k = 0u;
+    if (count > 0u) do {
         GpuLobe l = brdf_lobe(k);
         float w = l.albedo.w * (sym ? 0.5 : 1.0) / (l.flags.x != 0u ? 2.0 : 1.0);
         if (w > 0.0) p += w * lobe_pdf_sum(l, brdf_form(), sym, wo, wi);
-    }
+    } while (++k < count);
     return p / total;
 }
 
@@ -194,12 +202,14 @@ bool mixture_sample(vec3 wo, float total, float w_diffuse, float u0, float u1, f
     bool sym = brdf_symmetrize();
     float target = u0 * total;
     float acc = 0.0;
-    for (uint k = 0u; k < brdf_lobe_count(); k++) {
+    uint count = brdf_lobe_count(), k = 0u;
+    if (count > 0u) do {
         GpuLobe l = brdf_lobe(k);
         uint n = l.flags.x != 0u ? 2u : 1u;
         float w = l.albedo.w * (sym ? 0.5 : 1.0) / float(n);
         if (w <= 0.0) continue;
-        for (uint j = 0u; j < n; j++) {
+        uint j = 0u;
+        do {
             vec4 q = j == 0u ? l.rotation : quat_conjugate(l.rotation);
             if (brdf_form() == 2u) {
                 acc += w;
@@ -232,8 +242,8 @@ bool mixture_sample(vec3 wo, float total, float w_diffuse, float u0, float u1, f
                     return hb > 0.0 && wi.z > 0.0;
                 }
             }
-        }
-    }
+        } while (++j < n);
+    } while (++k < count);
     // The diffuse component (also where rounding left target past the lobes).
     float r = sqrt(u1);
     float a = 2.0 * PI * u2;

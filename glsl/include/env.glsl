@@ -9,10 +9,13 @@
 
 vec3 env_lookup(vec3 d, float lod) { return textureLod(ENV_TEX, equirect_uv(d), lod).rgb; }
 
-// Largest index i in [first, first + count) with table[i] <= x (first when none).
+// Largest index i in [first, first + count) with table[i] <= x (first when none). A do-while behind
+// a check (pass.glsl's note on loops).
 #define UPPER_SEARCH(TABLE, first, count, x, out_index) { \
     uint lo = 0u, hi = (count); \
-    while (hi - lo > 1u) { uint mid = (lo + hi) / 2u; if (TABLE[(first) + mid] <= (x)) lo = mid; else hi = mid; } \
+    if (hi - lo > 1u) do { \
+        uint mid = (lo + hi) / 2u; if (TABLE[(first) + mid] <= (x)) lo = mid; else hi = mid; \
+    } while (hi - lo > 1u); \
     out_index = lo; }
 
 // Direction from (u1, u2) ∈ [0,1)², with its pdf over solid angle; false for an all-black map.
