@@ -30,7 +30,9 @@ void main() {
     for (uint k = 0u; k < 4u; k++) {
         uint j = min(k, max(n, 1u) - 1u);
         dir[k] = pc.params.x != 0u ? lights.v[2u * j] : vec4(0.0);
-        power[k] = pc.params.x != 0u ? lights.v[2u * j + 1u] : vec4(0.0);
+        // Zero past the lights: the sum below runs over all four (a loop of constant count, unrolled;
+        // a `for (k < n)` loop costs a body more on llvmpipe, see pass.glsl).
+        power[k] = pc.params.x != 0u && k < n ? lights.v[2u * j + 1u] : vec4(0.0);
     }
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (!inside(p)) return;
@@ -40,7 +42,7 @@ void main() {
     if (dot(nrm, pc.eye.xyz - P.xyz) <= 0.0) return;
     vec4 acc = imageLoad(accum, p);
     vec3 e = irradiance(c, nrm);
-    for (uint k = 0u; k < n; k++) e += power[k].rgb * max(dot(nrm, dir[k].xyz), 0.0);
+    for (uint k = 0u; k < 4u; k++) e += power[k].rgb * max(dot(nrm, dir[k].xyz), 0.0);
     acc.rgb += pc.fparams.rgb / PI * e;
     imageStore(accum, p, acc);
 }
