@@ -58,6 +58,18 @@ fn assert_finite(name: &str, im: &Image) {
     assert_eq!(bad, 0, "{name}: {bad} pixels with NaN or Inf");
 }
 
+/// The largest difference of any colour channel between `a` and `b`, and `b`'s largest channel value.
+fn worst_and_peak(a: &Image, b: &Image) -> (f32, f32) {
+    let peak = b.pixels.iter().flat_map(|p| p[..3].iter().copied()).fold(0.0f32, f32::max);
+    let worst = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .fold(0.0f32, f32::max);
+    (worst, peak)
+}
+
 /// Renders `estimator` and the reference, returns the relative L1 over the object.
 fn compare(
     bound: f64,
@@ -496,13 +508,7 @@ fn skipping_the_lights_out_of_a_lobes_reach_leaves_the_image_unchanged() {
                 let full = r.render(&m, &s).unwrap().image;
                 let skipped = frame.image;
                 assert_finite("reach", &skipped);
-                let peak = full.pixels.iter().flat_map(|p| p[..3].iter().copied()).fold(0.0f32, f32::max);
-                let worst = skipped
-                    .pixels
-                    .iter()
-                    .zip(&full.pixels)
-                    .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                    .fold(0.0f32, f32::max);
+                let (worst, peak) = worst_and_peak(&skipped, &full);
                 if !(worst <= 1e-6 * peak) {
                     dump(&format!("reach-{map}"), &[("skipped", &skipped), ("full", &full)]);
                 }
@@ -567,13 +573,7 @@ fn the_in_cone_light_terms_after_the_sample_loop_equal_those_taken_in_it() {
                 r.scalar_lobes = true;
                 let inside = r.render(&m, &s).unwrap().image;
                 assert_finite("light hits", &after);
-                let peak = inside.pixels.iter().flat_map(|p| p[..3].iter().copied()).fold(0.0f32, f32::max);
-                let worst = after
-                    .pixels
-                    .iter()
-                    .zip(&inside.pixels)
-                    .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                    .fold(0.0f32, f32::max);
+                let (worst, peak) = worst_and_peak(&after, &inside);
                 if !(worst <= 1e-5 * peak) {
                     dump(&format!("hits-{map}-{spp}"), &[("after", &after), ("inside", &inside)]);
                 }
