@@ -333,8 +333,7 @@ vec3 integrate(GpuLobe l, vec3 b, bool reverse, vec4 q, Frame f, float omega_tex
 }
 
 // Σ over the lobe's components of their sample sums (halved for a split lobe's two views). `lit`:
-// its BRDF samples look for the key lights (a constant at every call site, so each inlined copy
-// keeps only its own code).
+// its BRDF samples look for the key lights (false at a pixel out of their reach).
 vec3 lobe_sum(GpuLobe l, vec4 q, vec3 wo, Frame f, float omega_texel, float n, vec2 rot, bool lit) {
     float views = SPLIT ? 0.5 : 1.0;
     vec3 sum = vec3(0.0);

@@ -8,7 +8,8 @@
 // costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here are
 // do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2 bodies,
 // identical images). Code that only some samples need costs its full price in every sample unless
-// it sits in a loop whose count is 0 for most vectors.
+// it moves out of the sample loop into a loop of its own, which runs once for a vector that needs
+// none of it (lobe.comp's `light_hits`).
 #ifndef PASS_GLSL
 #define PASS_GLSL
 #include "common.glsl"

@@ -33,7 +33,7 @@ impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
         let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
         let mut made: Vec<Image> = Vec::new();
-        let built = (|| -> Result<()> {
+        let built = (|| -> Result<Buffer> {
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.position")?);
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
             made.push(Image::new(
@@ -60,15 +60,9 @@ impl Targets {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
                 "refinement.sum",
             )?);
-            Ok(())
+            super::compact::list_buffer(ctx, width, height)
         })();
-        if let Err(e) = built {
-            for i in made {
-                i.destroy(ctx);
-            }
-            return Err(e);
-        }
-        let pixels = match super::compact::list_buffer(ctx, width, height) {
+        let pixels = match built {
             Ok(b) => b,
             Err(e) => {
                 for i in made {
