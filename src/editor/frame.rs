@@ -153,6 +153,9 @@ impl App {
             curves.paint(&ctx.layer_painter(egui::LayerId::background()), rect, log_graph);
         });
         egui_state.handle_platform_output(&gpu.window, output.platform_output);
+        // A repaint the panel asks for (egui's delay; `Duration::MAX` means none).
+        let delay = output.viewport_output.get(&egui::ViewportId::ROOT).map(|v| v.repaint_delay);
+        self.egui_repaint = delay.and_then(|d| std::time::Instant::now().checked_add(d));
         let primitives = self.egui_ctx.tessellate(output.shapes, output.pixels_per_point);
         self.spp = spp.max(1);
         (state.exposure, state.log_graph) = (exposure, log_graph);

@@ -2,14 +2,16 @@
 //! `State::handle` through `App::handle`; replayed inputs and the scripted window changes are fed
 //! between frames; idle windows refine the mesh view and otherwise sleep (no redraw is requested).
 
+use std::time::{Duration, Instant};
+
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::ActiveEventLoop;
+use winit::event_loop::{ActiveEventLoop, ControlFlow};
 use winit::keyboard::{Key, ModifiersState};
 use winit::window::WindowId;
 
 use super::state::Input;
-use super::{App, WindowStep, REFINE_MAX};
+use super::{App, WindowStep, WindowWait, MINIMISED_HOLD, MINIMISE_WAIT, REFINE_MAX};
 use crate::brush::BrushKind;
 
 /// The input a key press means, if any.
@@ -56,7 +58,8 @@ impl ApplicationHandler for App {
         // The tool panel sees every event first; what it takes does not reach the views.
         if let (Some(es), Some(g)) = (self.egui_state.as_mut(), self.gpu.as_ref()) {
             let r = es.on_window_event(&g.window, &event);
-            if r.repaint {
+            // (Not for the redraw itself: that would redraw forever.)
+            if r.repaint && !matches!(event, WindowEvent::RedrawRequested) {
                 g.window.request_redraw();
             }
             let passes = matches!(
@@ -141,23 +144,24 @@ impl ApplicationHandler for App {
             self.request_redraw();
             return;
         }
-        // Scripted window changes, one per turn, each after a frame was shown.
-        if self.shown {
-            if let (Some(step), Some(g)) = (self.window_script.pop_front(), self.gpu.as_ref()) {
-                match step {
-                    WindowStep::Resize(w, h) => {
-                        let _ = g.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
-                    }
-                    WindowStep::Minimise(yes) => g.window.set_minimized(yes),
-                }
+        el.set_control_flow(ControlFlow::Wait);
+        if self.window_script_turn(el) {
+            return;
+        }
+        // A repaint the tool panel asked for (an animation, a blinking cursor), when it is due.
+        if let Some(at) = self.egui_repaint {
+            if at <= Instant::now() {
+                self.egui_repaint = None;
                 self.request_redraw();
-                return;
+            } else {
+                el.set_control_flow(ControlFlow::WaitUntil(at));
             }
         }
         // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast
-        // image); once refined, nothing is requested and the loop sleeps until the next event.
+        // image, nor while minimised); once refined, nothing is requested and the loop sleeps until
+        // the next event (a restored window is exposed, which redraws it).
         let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
-        if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX {
+        if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX && !self.minimised() {
             self.request_redraw();
             return;
         }
@@ -170,5 +174,58 @@ impl ApplicationHandler for App {
             }
             el.exit();
         }
+    }
+}
+
+impl App {
+    /// The scripted window changes (`--resize`, `--minimise`), one per turn after a frame was
+    /// shown. A minimise or restore is the window manager's to do in its own time: the script
+    /// looks again every 20 ms until it is done (or `MINIMISE_WAIT` has passed: one stderr line,
+    /// the session goes on); a minimised window stays so for `MINIMISED_HOLD` and is asked to
+    /// redraw, which must draw nothing. Returns whether this turn was the script's.
+    fn window_script_turn(&mut self, el: &ActiveEventLoop) -> bool {
+        let poll = ControlFlow::wait_duration(Duration::from_millis(20));
+        match self.window_wait {
+            Some(WindowWait::Manager { minimised, since }) => {
+                if self.minimised() == minimised {
+                    self.request_redraw();
+                    self.window_wait = minimised.then(|| WindowWait::Hold(Instant::now() + MINIMISED_HOLD));
+                } else if since.elapsed() < MINIMISE_WAIT {
+                    el.set_control_flow(poll);
+                } else {
+                    self.window_wait = None;
+                    self.request_redraw();
+                    eprintln!(
+                        "brdf-shop: --minimise: the window was not {} within {} s (is a window manager running?)",
+                        if minimised { "minimised" } else { "restored" },
+                        MINIMISE_WAIT.as_secs()
+                    );
+                }
+                return true;
+            }
+            Some(WindowWait::Hold(until)) if Instant::now() < until => {
+                el.set_control_flow(ControlFlow::WaitUntil(until));
+                return true;
+            }
+            Some(WindowWait::Hold(_)) => self.window_wait = None,
+            None => {}
+        }
+        if !self.shown {
+            return false;
+        }
+        let (Some(step), Some(g)) = (self.window_script.front().copied(), self.gpu.as_ref()) else { return false };
+        self.window_script.pop_front();
+        match step {
+            WindowStep::Resize(w, h) => {
+                let _ = g.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                self.request_redraw();
+            }
+            WindowStep::Minimise(minimised) => {
+                g.window.set_minimized(minimised);
+                self.window_wait = Some(WindowWait::Manager { minimised, since: Instant::now() });
+                el.set_control_flow(poll);
+            }
+        }
+        true
     }
 }

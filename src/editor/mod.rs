@@ -60,6 +60,12 @@ struct App {
     pending: VecDeque<Input>,
     /// Scripted window changes still to make (`--resize`, `--minimise`), one per frame.
     window_script: VecDeque<WindowStep>,
+    /// What the window script waits for before its next step.
+    window_wait: Option<WindowWait>,
+    /// When the tool panel asked to be repainted (egui's repaint delay), if it did.
+    egui_repaint: Option<std::time::Instant>,
+    /// Redraws skipped because the window was minimised (`--frame-stats`).
+    skipped_minimised: u64,
     gpu: Option<Gpu>,
     state: Option<State>,
     modifiers: ModifiersState,
@@ -102,6 +108,21 @@ enum WindowStep {
     Resize(u32, u32),
     Minimise(bool),
 }
+
+/// What the window script waits for.
+#[derive(Clone, Copy, Debug)]
+enum WindowWait {
+    /// The window manager to minimise (`true`) or restore the window; asked at `since`.
+    Manager { minimised: bool, since: std::time::Instant },
+    /// The minimised window stays so until then.
+    Hold(std::time::Instant),
+}
+
+/// How long a scripted minimise or restore waits for the window manager to do it.
+pub const MINIMISE_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
+
+/// How long a scripted minimise keeps the window minimised.
+pub const MINIMISED_HOLD: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// Samples per pixel added by each refining frame, and where refinement stops.
 pub const REFINE_STEP: u32 = 16;
@@ -267,8 +288,18 @@ impl App {
         Ok(())
     }
 
-    /// Draws one frame and records its statistics.
+    /// Whether the window manager has minimised the window (an X11 window stays its size when
+    /// iconified, so the swapchain alone cannot tell).
+    fn minimised(&self) -> bool {
+        self.gpu.as_ref().is_some_and(|g| g.window.is_minimized() == Some(true))
+    }
+
+    /// Draws one frame and records its statistics; a minimised window draws nothing.
     fn draw(&mut self) -> Result<()> {
+        if self.minimised() {
+            self.skipped_minimised += 1;
+            return Ok(());
+        }
         let start = std::time::Instant::now();
         let kind = self.draw_frame()?;
         let Some(kind) = kind else { return Ok(()) };
@@ -354,7 +385,7 @@ impl App {
             let size = (state.layout.width, state.layout.height);
             let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
             let views = stats::views_json(state, self.env_summary.exposure, self.spp, refined);
-            let json = stats::frame_stats_json(&device, size, &self.frame_stats, views);
+            let json = stats::frame_stats_json(&device, size, &self.frame_stats, self.skipped_minimised, views);
             crate::fsio::write_atomic(p, json.as_bytes())?;
         }
         Ok(())
@@ -400,6 +431,9 @@ pub fn run(opts: Options) -> Result<()> {
         replay,
         pending: VecDeque::new(),
         window_script: VecDeque::new(),
+        window_wait: None,
+        egui_repaint: None,
+        skipped_minimised: 0,
         gpu: None,
         state: None,
         modifiers: ModifiersState::empty(),

@@ -21,9 +21,16 @@ pub struct FrameStat {
 
 /// `{"device", "size": [W, H], "frames": [{"kind", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
 /// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
-/// "refinement": {…}, "views": …}` — `views` says where the last frame put the mesh view and the
+/// "refinement": {…}, "skipped_minimised": N, "views": …}` — `skipped_minimised` counts the redraws
+/// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
 /// canvas and how (camera, exposure, light), so that a headless render can reproduce them.
-pub fn frame_stats_json(device: &str, size: (u32, u32), frames: &[FrameStat], views: serde_json::Value) -> String {
+pub fn frame_stats_json(
+    device: &str,
+    size: (u32, u32),
+    frames: &[FrameStat],
+    skipped_minimised: u64,
+    views: serde_json::Value,
+) -> String {
     use serde_json::json;
     let kind_name = |k: FrameKind| match k {
         FrameKind::Interaction => "interaction",
@@ -51,7 +58,7 @@ pub fn frame_stats_json(device: &str, size: (u32, u32), frames: &[FrameStat], vi
         .collect();
     let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
                       "interaction": summary(FrameKind::Interaction), "refinement": summary(FrameKind::Refinement),
-                      "views": views });
+                      "skipped_minimised": skipped_minimised, "views": views });
     let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
     s.push('\n');
     s
