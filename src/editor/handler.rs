@@ -11,7 +11,7 @@ use winit::keyboard::{Key, ModifiersState};
 use winit::window::WindowId;
 
 use super::state::Input;
-use super::{App, WindowStep, WindowWait, MINIMISED_HOLD, MINIMISE_WAIT, REFINE_MAX};
+use super::{App, WindowStep, WindowWait, MINIMISED_HOLD, MINIMISED_POLL, MINIMISE_WAIT, REFINE_MAX};
 use crate::brush::BrushKind;
 
 /// The input a key press means, if any.
@@ -148,6 +148,18 @@ impl ApplicationHandler for App {
         if self.window_script_turn(el) {
             return;
         }
+        // A minimised window draws nothing and does not refine (nor quit: a `--screenshot` waits
+        // for the window to come back). It looks every quarter second whether it was restored, and
+        // then redraws: the expose that comes with the restore may arrive before the window manager
+        // has cleared the hidden state, and that redraw was skipped.
+        if self.shown && self.minimised() {
+            self.restore_redraw = true;
+            el.set_control_flow(ControlFlow::wait_duration(MINIMISED_POLL));
+            return;
+        }
+        if std::mem::take(&mut self.restore_redraw) {
+            self.request_redraw();
+        }
         // A repaint the tool panel asked for (an animation, a blinking cursor), when it is due.
         if let Some(at) = self.egui_repaint {
             if at <= Instant::now() {
@@ -158,10 +170,9 @@ impl ApplicationHandler for App {
             }
         }
         // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast
-        // image, nor while minimised); once refined, nothing is requested and the loop sleeps until
-        // the next event (a restored window is exposed, which redraws it).
+        // image); once refined, nothing is requested and the loop sleeps until the next event.
         let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
-        if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX && !self.minimised() {
+        if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX {
             self.request_redraw();
             return;
         }

@@ -66,6 +66,8 @@ struct App {
     egui_repaint: Option<std::time::Instant>,
     /// Redraws skipped because the window was minimised (`--frame-stats`).
     skipped_minimised: u64,
+    /// The window was seen minimised: redraw once it is not.
+    restore_redraw: bool,
     gpu: Option<Gpu>,
     state: Option<State>,
     modifiers: ModifiersState,
@@ -120,6 +122,9 @@ enum WindowWait {
 
 /// How long a scripted minimise or restore waits for the window manager to do it.
 pub const MINIMISE_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
+
+/// How often a minimised window looks whether it was restored.
+pub const MINIMISED_POLL: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// How long a scripted minimise keeps the window minimised.
 pub const MINIMISED_HOLD: std::time::Duration = std::time::Duration::from_millis(500);
@@ -434,6 +439,7 @@ pub fn run(opts: Options) -> Result<()> {
         window_wait: None,
         egui_repaint: None,
         skipped_minimised: 0,
+        restore_redraw: false,
         gpu: None,
         state: None,
         modifiers: ModifiersState::empty(),
