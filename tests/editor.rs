@@ -368,6 +368,39 @@ fn a_window_larger_than_the_display_is_clamped() {
     assert!(img.width() <= 640 && img.height() <= 480, "{:?}", img.dimensions());
 }
 
+/// `--minimise` without a window manager (plain Xvfb: nobody acts on the request): the script waits
+/// its 10 s, says so in one stderr line naming `--minimise`, and the session goes on to its end
+/// with nothing skipped (the window was never minimised) and the screenshot taken. Under `timeout`
+/// (120 s; the session takes about 13): a script that stops waking up after the wait hangs instead
+/// of ending, and fails here with status 124.
+#[test]
+fn minimise_without_a_window_manager_is_one_line_and_the_session_goes_on() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let run = Command::new("timeout")
+        .args(["120", "xvfb-run", "-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit"])
+        .arg("--replay")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.strokes.json"))
+        .args(["--minimise", "--quit", "--size", "200x120", "--screenshot"])
+        .arg(d("shot.png"))
+        .arg("--frame-stats")
+        .arg(d("stats.json"))
+        .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+        .output()
+        .expect("timeout and xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{:?}: {stderr}", run.status);
+    assert!(!stderr.contains("panicked") && !stderr.contains("alidation"), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains("--minimise")).collect();
+    assert_eq!(
+        lines,
+        ["brdf-shop: --minimise: the window was not minimised within 10 s (is a window manager running?)"]
+    );
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d("stats.json")).unwrap()).unwrap();
+    assert_eq!(doc["skipped_minimised"], 0);
+    assert_eq!(image::open(d("shot.png")).unwrap().to_rgba8().dimensions(), (200, 120));
+}
+
 /// The window shows what the headless renderer renders (issue 11): the screenshot's mesh view and
 /// canvas equal `render` of the same views — size, camera, exposure and canvas light read from
 /// `--frame-stats`'s `views` — within 1 level of 255 per channel. Both run the same passes with the
