@@ -71,6 +71,13 @@ fn render_writes_exr_png_and_timings() {
     assert!(k["share"].as_f64().unwrap() > 0.5 && k["threshold_over_mean"].as_f64() == Some(30.0), "{k}");
     assert!(names[3..].iter().all(|n| n.contains("key,lights")), "{names:?}");
     assert!(stderr.contains("key estimator: 1 key light(s)"), "{stderr}");
+    // Beside the lamp, studio's softbox is a wide light, taken as points by lobes of α ≥ 0.36.
+    let wide = &k["wide"];
+    assert_eq!(wide["lights"].as_array().map(Vec::len), Some(1), "{k}");
+    assert!(wide["share"].as_f64().unwrap() > 0.02 && wide["threshold_over_mean"].as_f64() == Some(10.0), "{k}");
+    let min_alpha = wide["quadrature_min_alpha"].as_f64().unwrap();
+    assert!((0.3..0.45).contains(&min_alpha), "{k}");
+    assert!(stderr.contains("1 wide light(s)"), "{stderr}");
 
     // A map without a compact light: the decision says so and no pass takes the light term.
     let (code, _, stderr) = run(&[
@@ -87,6 +94,8 @@ fn render_writes_exr_png_and_timings() {
     assert_eq!(code, 0, "{stderr}");
     let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
     assert_eq!(t["key_lights"]["lights"].as_array().map(Vec::len), Some(0), "{t}");
+    assert_eq!(t["key_lights"]["wide"]["lights"].as_array().map(Vec::len), Some(0), "{t}");
+    assert!(t["key_lights"]["wide"]["quadrature_min_alpha"].is_null(), "{t}");
     assert!(t["key_lights"]["decision"].as_str().unwrap().starts_with("no key light"), "{t}");
     let names: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
     assert!(names.iter().any(|n| n.contains("key")) && !names.iter().any(|n| n.contains("lights")), "{names:?}");

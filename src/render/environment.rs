@@ -77,6 +77,41 @@ pub struct GpuKeyLights {
     pub points: Buffer,
     /// The lights, as detected.
     pub lights: Vec<keylight::KeyLight>,
+    /// The wide lights beside them (`keylight::WideLights`), if the map has any.
+    pub wide: Option<GpuWideLights>,
+}
+
+/// The wide lights on the GPU: the residual map without them (and without the key lights), and
+/// the key and wide lights' quadrature points together, for the lobes that see all of them as
+/// points.
+pub struct GpuWideLights {
+    pub residual: Image,
+    pub points: Buffer,
+    /// How many points `points` holds (four per light).
+    pub count: u32,
+    /// The wide lights, as detected.
+    pub lights: Vec<keylight::KeyLight>,
+}
+
+impl GpuWideLights {
+    fn new(ctx: &Context, keys: &KeyLights, wide: &keylight::WideLights) -> Result<GpuWideLights> {
+        let residual = upload_texture(ctx, &wide.residual, "keylights.wide.residual")?;
+        let all: Vec<keylight::KeyLight> = keys.lights.iter().chain(&wide.lights).cloned().collect();
+        match storage(ctx, &keylight::point_table(&all).concat(), "keylights.wide.points") {
+            Ok(points) => {
+                Ok(GpuWideLights { residual, points, count: 4 * all.len() as u32, lights: wide.lights.clone() })
+            }
+            Err(e) => {
+                residual.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn destroy(self, ctx: &Context) {
+        self.residual.destroy(ctx);
+        self.points.destroy(ctx);
+    }
 }
 
 /// What the renderer decided about a map's key lights (reported by `render --timings` and `report`).
@@ -85,6 +120,9 @@ pub struct KeyLightSummary {
     pub lights: Vec<crate::scene::keylight::KeyLight>,
     pub share: f64,
     pub threshold: f64,
+    /// The wide lights beside the key lights and their share (empty and 0 without).
+    pub wide: Vec<crate::scene::keylight::KeyLight>,
+    pub wide_share: f64,
 }
 
 impl KeyLightSummary {
@@ -96,22 +134,27 @@ impl KeyLightSummary {
             "threshold_over_mean": crate::scene::keylight::THRESHOLD_OVER_MEAN,
             "quadrature_ratio": crate::scene::keylight::QUADRATURE_RATIO,
             "share": self.share,
-            "lights": self.lights.iter().map(|l| serde_json::json!({
-                "direction": [l.direction.x, l.direction.y, l.direction.z],
-                "angular_radius_deg": l.angular_radius.to_degrees(),
-                "extent_deg": l.extent.to_degrees(),
-                "spread_deg": l.spread.to_degrees(),
-                "solid_angle": l.solid_angle,
-                "power": l.power,
-                "texels": l.texels,
-            })).collect::<Vec<_>>(),
+            "lights": self.lights.iter().map(light_json).collect::<Vec<_>>(),
+            "wide": {
+                "threshold_over_mean": crate::scene::keylight::WIDE_THRESHOLD_OVER_MEAN,
+                "share": self.wide_share,
+                "quadrature_min_alpha": self.wide_min_alpha(),
+                "lights": self.wide.iter().map(light_json).collect::<Vec<_>>(),
+            },
         })
+    }
+
+    /// The smallest `min(αx, αy)` of a lobe that sees the key and wide lights as points (`None`
+    /// without wide lights).
+    pub fn wide_min_alpha(&self) -> Option<f64> {
+        let spread = self.lights.iter().chain(&self.wide).map(|l| l.spread).fold(0.0, f64::max);
+        (!self.wide.is_empty()).then(|| spread / crate::scene::keylight::QUADRATURE_RATIO)
     }
 
     /// One line: how many lights, their share of the energy, the threshold, and each light's radius and
     /// direction (or why there is none).
     pub fn describe(&self) -> String {
-        use crate::scene::keylight::{MIN_SHARE, QUADRATURE_RATIO, THRESHOLD_OVER_MEAN};
+        use crate::scene::keylight::{MIN_SHARE, QUADRATURE_RATIO, THRESHOLD_OVER_MEAN, WIDE_THRESHOLD_OVER_MEAN};
         if self.lights.is_empty() {
             return format!(
                 "no key light (no compact region above {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4} carries ≥ {:.0} % of the energy): no light term",
@@ -119,31 +162,53 @@ impl KeyLightSummary {
                 MIN_SHARE * 100.0
             );
         }
-        let each: Vec<String> = self
-            .lights
-            .iter()
-            .map(|l| {
-                let d = l.direction;
-                format!(
-                    "radius {:.2}°, spread {:.2}° toward ({:.3}, {:.3}, {:.3})",
-                    l.angular_radius.to_degrees(),
-                    l.spread.to_degrees(),
-                    d.x,
-                    d.y,
-                    d.z
-                )
-            })
-            .collect();
+        let each: Vec<String> = self.lights.iter().map(describe_light).collect();
         let spread = self.lights.iter().map(|l| l.spread).fold(0.0, f64::max);
-        format!(
+        let mut line = format!(
             "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}; lobes with min(αx, αy) ≥ {:.4} (the largest spread ≤ {QUADRATURE_RATIO} α) see them as 4 quadrature points each, the others by MIS",
             self.lights.len(),
             self.share * 100.0,
             self.threshold,
             each.join("; "),
             spread / QUADRATURE_RATIO
-        )
+        );
+        if let Some(alpha) = self.wide_min_alpha() {
+            let each: Vec<String> = self.wide.iter().map(describe_light).collect();
+            line += &format!(
+                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both",
+                self.wide.len(),
+                self.wide_share * 100.0,
+                each.join("; ")
+            );
+        }
+        line
     }
+}
+
+/// One light in `render --timings`' JSON.
+fn light_json(l: &keylight::KeyLight) -> serde_json::Value {
+    serde_json::json!({
+        "direction": [l.direction.x, l.direction.y, l.direction.z],
+        "angular_radius_deg": l.angular_radius.to_degrees(),
+        "extent_deg": l.extent.to_degrees(),
+        "spread_deg": l.spread.to_degrees(),
+        "solid_angle": l.solid_angle,
+        "power": l.power,
+        "texels": l.texels,
+    })
+}
+
+/// One light in the decision's line: radius, spread and direction.
+fn describe_light(l: &keylight::KeyLight) -> String {
+    let d = l.direction;
+    format!(
+        "radius {:.2}°, spread {:.2}° toward ({:.3}, {:.3}, {:.3})",
+        l.angular_radius.to_degrees(),
+        l.spread.to_degrees(),
+        d.x,
+        d.y,
+        d.z
+    )
 }
 
 /// Uploads `env`'s mip chain into a new sampled image.
@@ -253,7 +318,17 @@ impl GpuKeyLights {
             Err(_) => unreachable!("the closure pushed three buffers before succeeding"),
         };
         let lights = keys.lights.clone();
-        Ok(GpuKeyLights { residual, sh, cones, texels, sampling, points, lights })
+        let mut gpu = GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, wide: None };
+        if let Some(w) = &keys.wide {
+            match GpuWideLights::new(ctx, keys, w) {
+                Ok(g) => gpu.wide = Some(g),
+                Err(e) => {
+                    gpu.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        }
+        Ok(gpu)
     }
 
     fn destroy(self, ctx: &Context) {
@@ -261,6 +336,9 @@ impl GpuKeyLights {
         self.texels.destroy(ctx);
         for b in [self.sh, self.cones, self.points] {
             b.destroy(ctx);
+        }
+        if let Some(w) = self.wide {
+            w.destroy(ctx);
         }
     }
 }
@@ -318,6 +396,8 @@ impl GpuEnvironment {
                 lights: detected.lights.clone(),
                 share: detected.share,
                 threshold: detected.threshold,
+                wide: detected.wide.as_ref().map_or(Vec::new(), |w| w.lights.clone()),
+                wide_share: detected.wide.as_ref().map_or(0.0, |w| w.share),
             },
         };
         if !detected.lights.is_empty() {

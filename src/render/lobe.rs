@@ -48,6 +48,9 @@ pub struct Variant {
     /// With `lights`, a lobe much wider than every light (`keylight::quadrature_fits`): the lights
     /// are their quadrature points, evaluated exactly, and the BRDF samples read the residual only.
     pub points: bool,
+    /// With `points`, a lobe that sees the map's wide lights as points too (`keylight::WideLights`):
+    /// its points are the key and wide lights', and its BRDF samples read the map without both.
+    pub wide: bool,
     /// With `lights`, a lobe of one component narrow enough that most pixels' lobes cannot reach a
     /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe.comp` `sees_lights`).
     pub reach: bool,
@@ -94,6 +97,7 @@ impl Variant {
             key: false,
             lights: false,
             points: false,
+            wide: false,
             reach: false,
         }
     }
@@ -111,6 +115,7 @@ impl Variant {
             (self.key, "key"),
             (self.lights, "lights"),
             (self.points, "points"),
+            (self.wide, "wide"),
             (self.reach, "reach"),
         ]
         .iter()
@@ -190,13 +195,21 @@ impl LobePass {
         // Stand-ins where the variant reads no key lights (the layout is the same for every variant).
         let (cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
         let (samples_buf, m, counts) = light_samples.filter(|_| variant.lights).unwrap_or((&env.pdf, 0, [0.0; 2]));
+        let residual = match (variant.key, keys.and_then(|k| k.wide.as_ref()).filter(|_| variant.wide)) {
+            (true, Some(w)) => &w.residual,
+            (true, None) if variant.wide => {
+                return Err(crate::Error::Validation("a wide-light lobe pass on a map without wide lights".into()))
+            }
+            (true, None) => env.residual().0,
+            (false, _) => &env.texture,
+        };
         let set = rec.set(
             pipeline,
             &[
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
-                Binding::Sampled(if variant.key { env.residual().0.view } else { env.texture.view }, env.sampler),
+                Binding::Sampled(residual.view, env.sampler),
                 Binding::Storage(material),
                 Binding::Storage(halton),
                 Binding::Sampled(texels.view, env.sampler),

@@ -99,6 +99,10 @@ pub struct Renderer {
     /// Let the `key` lobe passes of narrow lobes skip the key lights at pixels whose lobe cannot
     /// reach them (`lobe::reach_test_pays`); the image is the same either way (a test compares).
     pub light_reach_test: bool,
+    /// Let the `key` lobe passes of lobes that see every key and wide light as points take the wide
+    /// lights off their residual map (`keylight::WideLights`); false leaves them in it (a test
+    /// compares the two).
+    pub wide_lights: bool,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -132,6 +136,7 @@ impl Renderer {
             scalar_lobes: false,
             cull_hidden_faces: true,
             light_reach_test: true,
+            wide_lights: true,
             seed: 0,
             passes: Some(passes),
             env: None,

@@ -148,8 +148,14 @@ impl Renderer {
             .enumerate()
             .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
             .map(|(i, l)| {
-                let points = key_lights
-                    .is_some_and(|k| crate::scene::keylight::quadrature_fits(&k.lights, l.alpha_x, l.alpha_y));
+                let fits = |lights: &[crate::scene::keylight::KeyLight]| {
+                    crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
+                };
+                let points = key_lights.is_some_and(|k| fits(&k.lights));
+                // A lobe that sees the wide lights as points too takes them off its residual.
+                let wide = self.wide_lights
+                    && points
+                    && key_lights.and_then(|k| k.wide.as_ref()).is_some_and(|w| fits(&w.lights));
                 (
                     i as u32,
                     lobe::Variant {
@@ -157,6 +163,7 @@ impl Renderer {
                         key,
                         lights,
                         points,
+                        wide,
                         reach: self.light_reach_test && lights && !points && lobe::reach_test_pays(material, l),
                         ..lobe::Variant::of(material, l, prefilter)
                     },
@@ -187,6 +194,7 @@ impl Renderer {
         let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
         let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
         let light_points = key_lights.map(|k| (&k.points, 4 * k.lights.len() as u32, [0.0; 2]));
+        let wide_points = key_lights.and_then(|k| k.wide.as_ref()).map(|w| (&w.points, w.count, [0.0; 2]));
         let passes = self.passes.as_ref().expect("passes live until drop");
         // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
         // the farthest point of the frustum in front of the near plane.
@@ -242,7 +250,11 @@ impl Renderer {
                             seed: self.seed,
                             material: material_buf,
                             halton,
-                            light_samples: if v.points { light_points } else { light_samples },
+                            light_samples: match (v.points, v.wide) {
+                                (true, true) => wide_points,
+                                (true, false) => light_points,
+                                (false, _) => light_samples,
+                            },
                         };
                         passes.lobe.record(&rec, v, &job)
                     })?;

@@ -10,6 +10,10 @@
 //! lights carry exactly the map's energy, texel for texel. Lights carrying less than [`MIN_SHARE`] of
 //! the map's energy are left in the map (not worth a pass); at most [`MAX_LIGHTS`] are kept.
 //!
+//! Beside key lights, [`WideLights`] are found the same way in what is left of the map, at a lower
+//! threshold and a larger size (a studio's softbox); only lobes that see them as quadrature points
+//! take them off the map they sample.
+//!
 //! Pure CPU, no GPU; owns no file I/O.
 
 use std::collections::HashSet;
@@ -26,6 +30,13 @@ pub const THRESHOLD_OVER_MEAN: f64 = 30.0;
 /// The largest solid angle of a compact light, in steradians (a disc of about 7° radius): anything
 /// wider (a window, a bright patch of sky) is left to the prefiltered map.
 pub const MAX_SOLID_ANGLE: f64 = 0.05;
+
+/// Wide lights (see [`WideLights`]): texels above this multiple of the map's mean luminance, once the
+/// key lights are removed. Studio maps' softboxes are 10–30 times the mean.
+pub const WIDE_THRESHOLD_OVER_MEAN: f64 = 10.0;
+
+/// The largest solid angle of a wide light (a disc of about 14° radius).
+pub const WIDE_MAX_SOLID_ANGLE: f64 = 0.2;
 
 /// The smallest share of the map's energy (luminance × solid angle) a light must carry to be split off.
 pub const MIN_SHARE: f64 = 0.02;
@@ -142,6 +153,23 @@ pub struct KeyLights {
     pub share: f64,
     /// The luminance threshold used (`THRESHOLD_OVER_MEAN` × the mean).
     pub threshold: f64,
+    /// The wide lights found beside key lights, if any.
+    pub wide: Option<WideLights>,
+}
+
+/// Wide lights: what is left of the map after the key lights is searched again at
+/// [`WIDE_THRESHOLD_OVER_MEAN`] for regions up to [`WIDE_MAX_SOLID_ANGLE`] (a studio's softbox, a
+/// bright window). Only lobes wide enough to see every key and wide light as quadrature points
+/// ([`quadrature_fits`] over both) take them: for those the wide lights leave the residual map
+/// they sample, whose hot spots would otherwise make their noise; every other lobe keeps them in its
+/// residual map, where its own samples resolve them better than light samples would.
+#[derive(Clone, Debug)]
+pub struct WideLights {
+    pub lights: Vec<KeyLight>,
+    /// The key lights' residual with the wide lights removed as well.
+    pub residual: Environment,
+    /// Their share of the map's energy.
+    pub share: f64,
 }
 
 fn luminance(c: [f32; 3]) -> f64 {
@@ -285,8 +313,8 @@ impl KeyLights {
     }
 }
 
-/// Finds the key lights of `env` (see the module note). A map without any gives no lights and a
-/// residual equal to the map.
+/// Finds the key lights of `env` (see the module note), and beside them the map's wide lights. A
+/// map without key lights gives none (and no wide lights) and a residual equal to the map.
 pub fn detect(env: &Environment) -> KeyLights {
     let (w, h) = (env.width, env.height);
     let d_omega: Vec<f64> = (0..h).map(|j| env.texel_solid_angle(j)).collect();
@@ -294,11 +322,26 @@ pub fn detect(env: &Environment) -> KeyLights {
     let total: f64 = lum.iter().enumerate().map(|(k, l)| l * d_omega[k / w]).sum();
     let total_abs: f64 = lum.iter().enumerate().map(|(k, l)| l.abs() * d_omega[k / w]).sum();
     let mean = total / (4.0 * std::f64::consts::PI);
-    let threshold = THRESHOLD_OVER_MEAN * mean;
+    let (lights, residual, share) = find_lights(env, THRESHOLD_OVER_MEAN * mean, MAX_SOLID_ANGLE, total_abs);
+    let wide = if lights.is_empty() {
+        None
+    } else {
+        let (wide, wide_residual, wide_share) =
+            find_lights(&residual, WIDE_THRESHOLD_OVER_MEAN * mean, WIDE_MAX_SOLID_ANGLE, total_abs);
+        (!wide.is_empty()).then_some(WideLights { lights: wide, residual: wide_residual, share: wide_share })
+    };
+    KeyLights { lights, residual, share, threshold: THRESHOLD_OVER_MEAN * mean, wide }
+}
+
+/// The lights of `env` above `threshold` no wider than `max_solid` carrying at least `MIN_SHARE` of
+/// `total_abs` (at most `MAX_LIGHTS`, the brightest first), the map with them removed, and their share.
+fn find_lights(env: &Environment, threshold: f64, max_solid: f64, total_abs: f64) -> (Vec<KeyLight>, Environment, f64) {
+    let (w, h) = (env.width, env.height);
+    let d_omega: Vec<f64> = (0..h).map(|j| env.texel_solid_angle(j)).collect();
+    let lum: Vec<f64> = env.texels.iter().map(|&t| luminance(t)).collect();
     let mut residual = env.clone();
-    let none = |residual| KeyLights { lights: Vec::new(), residual, share: 0.0, threshold };
-    if !(mean > 0.0 && w > 2 && h > 2) {
-        return none(residual);
+    if !(threshold > 0.0 && total_abs > 0.0 && w > 2 && h > 2) {
+        return (Vec::new(), residual, 0.0);
     }
 
     // Connected components of the bright texels.
@@ -329,7 +372,7 @@ pub fn detect(env: &Environment) -> KeyLights {
     let mut candidates: Vec<(KeyLight, Vec<usize>, [f32; 3])> = Vec::new();
     for members in components {
         let solid: f64 = members.iter().map(|&k| d_omega[k / w]).sum();
-        if solid > MAX_SOLID_ANGLE {
+        if solid > max_solid {
             continue;
         }
         let mut inside: HashSet<usize> = members.iter().copied().collect();
@@ -407,6 +450,6 @@ pub fn detect(env: &Environment) -> KeyLights {
         moved += p;
         lights.push(light);
     }
-    residual.origin = format!("{} (key lights removed)", env.origin);
-    KeyLights { lights, residual, share: moved / total_abs, threshold }
+    residual.origin = format!("{} (lights removed)", env.origin);
+    (lights, residual, moved / total_abs)
 }
