@@ -322,23 +322,32 @@ pub fn detect(env: &Environment) -> KeyLights {
     let total: f64 = lum.iter().enumerate().map(|(k, l)| l * d_omega[k / w]).sum();
     let total_abs: f64 = lum.iter().enumerate().map(|(k, l)| l.abs() * d_omega[k / w]).sum();
     let mean = total / (4.0 * std::f64::consts::PI);
-    let (lights, residual, share) = find_lights(env, THRESHOLD_OVER_MEAN * mean, MAX_SOLID_ANGLE, total_abs);
+    let key = (THRESHOLD_OVER_MEAN * mean, MAX_SOLID_ANGLE);
+    let (lights, mut residual, share) = find_lights(env, &lum, &d_omega, key, total_abs);
+    residual.origin = format!("{} (key lights removed)", env.origin);
     let wide = if lights.is_empty() {
         None
     } else {
-        let (wide, wide_residual, wide_share) =
-            find_lights(&residual, WIDE_THRESHOLD_OVER_MEAN * mean, WIDE_MAX_SOLID_ANGLE, total_abs);
+        let lum: Vec<f64> = residual.texels.iter().map(|&t| luminance(t)).collect();
+        let limits = (WIDE_THRESHOLD_OVER_MEAN * mean, WIDE_MAX_SOLID_ANGLE);
+        let (wide, mut wide_residual, wide_share) = find_lights(&residual, &lum, &d_omega, limits, total_abs);
+        wide_residual.origin = format!("{} (key and wide lights removed)", env.origin);
         (!wide.is_empty()).then_some(WideLights { lights: wide, residual: wide_residual, share: wide_share })
     };
     KeyLights { lights, residual, share, threshold: THRESHOLD_OVER_MEAN * mean, wide }
 }
 
-/// The lights of `env` above `threshold` no wider than `max_solid` carrying at least `MIN_SHARE` of
-/// `total_abs` (at most `MAX_LIGHTS`, the brightest first), the map with them removed, and their share.
-fn find_lights(env: &Environment, threshold: f64, max_solid: f64, total_abs: f64) -> (Vec<KeyLight>, Environment, f64) {
+/// The lights of `env` (texel luminances `lum`, row solid angles `d_omega`) above `threshold` no
+/// wider than `max_solid` carrying at least `MIN_SHARE` of `total_abs` (at most `MAX_LIGHTS`, the
+/// brightest first), the map with them removed, and their share.
+fn find_lights(
+    env: &Environment,
+    lum: &[f64],
+    d_omega: &[f64],
+    (threshold, max_solid): (f64, f64),
+    total_abs: f64,
+) -> (Vec<KeyLight>, Environment, f64) {
     let (w, h) = (env.width, env.height);
-    let d_omega: Vec<f64> = (0..h).map(|j| env.texel_solid_angle(j)).collect();
-    let lum: Vec<f64> = env.texels.iter().map(|&t| luminance(t)).collect();
     let mut residual = env.clone();
     if !(threshold > 0.0 && total_abs > 0.0 && w > 2 && h > 2) {
         return (Vec::new(), residual, 0.0);
@@ -450,6 +459,5 @@ fn find_lights(env: &Environment, threshold: f64, max_solid: f64, total_abs: f64
         moved += p;
         lights.push(light);
     }
-    residual.origin = format!("{} (lights removed)", env.origin);
     (lights, residual, moved / total_abs)
 }
