@@ -561,4 +561,21 @@ fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validat
     assert!(!stderr.contains("--minimise"), "{stderr}");
     let skipped = doc["skipped_minimised"].as_u64().unwrap();
     assert!((1..10).contains(&skipped), "redraws skipped while minimised: {skipped}");
+    // The timestamps time the passes they bracket. A lobe pass (8 samples a pixel over the mesh's
+    // pixels) measures 2-10x the background pass (one lookup a pixel over the view) in this session
+    // (debug build, 320x240; torus or bunny). Until session 11 lavapipe read a compute pass's first
+    // timestamp only when the next pass flushed its rasteriser, after the pass had run: the lobe
+    // passes of the frames that reuse the G-buffer read 0.0-0.1 ms against a background of 2.4-10 ms
+    // (at most 0.04 of it). The bound, a quarter, sits between the two by a factor of 6-8 each way.
+    let mut lobes = 0;
+    for f in doc["frames"].as_array().unwrap() {
+        let passes = f["passes"].as_array().unwrap();
+        let ms = |p: &serde_json::Value| p["ms"].as_f64().unwrap();
+        let Some(background) = passes.iter().find(|p| p["name"] == "background").map(ms) else { continue };
+        for lobe in passes.iter().filter(|p| p["name"].as_str().unwrap().starts_with("lobe")) {
+            assert!(ms(lobe) > 0.25 * background, "a lobe pass timed below a quarter of the background: {f}");
+            lobes += 1;
+        }
+    }
+    assert!(lobes >= 4, "the strokes' frames have lobe passes: {doc}");
 }
