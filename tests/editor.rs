@@ -127,23 +127,37 @@ fn idle_frames_refine_the_mesh_view() {
     assert!(!stderr.contains("panicked"), "a thread panicked: {stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
     assert!(spread(&img, (0, 0, 128, 144)) > 2.0, "the mesh view is empty");
-    // --frame-stats: one interaction frame (the first: mesh view, canvas, compose), then 1024 / 16 =
+    // --frame-stats: one interaction frame (mesh view, compose), then 1024 / 16 =
     // 64 refinement frames, each adding `mis` samples on the GPU (mis, accumulate, compose) without
     // re-rendering the canvas (nothing changed it), each with its GPU time and its passes named.
     let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     let frames = doc["frames"].as_array().unwrap();
     let kind = |k: &str| frames.iter().filter(|f| f["kind"] == k).count();
     assert_eq!((kind("interaction"), kind("refinement")), (1, 64), "{doc}");
+    // The canvas is rendered once, by the first frame (which may be one waiting for the mesh
+    // view's lobe pipelines).
+    let canvases = frames.iter().filter(|f| f["passes"].as_array().unwrap().iter().any(|p| p["name"] == "canvas"));
+    assert_eq!(canvases.count(), 1, "{doc}");
     for f in frames {
         let (wall, gpu) = (f["wall_ms"].as_f64().unwrap(), f["gpu_ms"].as_f64().unwrap());
         assert!(gpu > 0.0 && wall > 0.0, "{f}");
         let passes = f["passes"].as_array().unwrap();
         let has = |n: &str| passes.iter().any(|p| p["name"] == n);
         assert!(has("compose"), "{f}");
+        let ms = |n: &str| passes.iter().filter(|p| p["name"] == n).map(|p| p["ms"].as_f64().unwrap()).sum::<f64>();
         if f["kind"] == "refinement" {
             assert!(has("mis") && has("accumulate") && !has("canvas"), "{f}");
+            // The timestamps time the passes they bracket: 16 `mis` samples a pixel over the
+            // sphere measure 100x the compose pass (one read and write a window pixel; 98-295 ms
+            // against 0.9-6 ms, release build). Until session 11 lavapipe read a compute pass's
+            // first timestamp only when the next pass flushed its rasteriser, after the pass had
+            // run, and these `mis` passes read 0.03-0.66 ms against a compose of 0.9-1.8 ms.
+            assert!(ms("mis") > ms("compose"), "the mis pass timed below the compose pass: {f}");
+        } else if f["kind"] == "waiting" {
+            // The mesh view waits for its lobe pipelines, built off the UI thread: nothing of it.
+            assert!(!has("gbuffer") && !passes.iter().any(|p| p["name"].as_str().unwrap().starts_with("lobe")), "{f}");
         } else {
-            assert!(has("canvas") && has("gbuffer"), "{f}");
+            assert!(has("gbuffer"), "{f}");
         }
         let sum: f64 = passes.iter().map(|p| p["ms"].as_f64().unwrap()).sum();
         assert!((sum - gpu).abs() <= 1e-9 * gpu, "{f}");
@@ -561,21 +575,4 @@ fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validat
     assert!(!stderr.contains("--minimise"), "{stderr}");
     let skipped = doc["skipped_minimised"].as_u64().unwrap();
     assert!((1..10).contains(&skipped), "redraws skipped while minimised: {skipped}");
-    // The timestamps time the passes they bracket. A lobe pass (8 samples a pixel over the mesh's
-    // pixels) measures 2-10x the background pass (one lookup a pixel over the view) in this session
-    // (debug build, 320x240; torus or bunny). Until session 11 lavapipe read a compute pass's first
-    // timestamp only when the next pass flushed its rasteriser, after the pass had run: the lobe
-    // passes of the frames that reuse the G-buffer read 0.0-0.1 ms against a background of 2.4-10 ms
-    // (at most 0.04 of it). The bound, a quarter, sits between the two by a factor of 6-8 each way.
-    let mut lobes = 0;
-    for f in doc["frames"].as_array().unwrap() {
-        let passes = f["passes"].as_array().unwrap();
-        let ms = |p: &serde_json::Value| p["ms"].as_f64().unwrap();
-        let Some(background) = passes.iter().find(|p| p["name"] == "background").map(ms) else { continue };
-        for lobe in passes.iter().filter(|p| p["name"].as_str().unwrap().starts_with("lobe")) {
-            assert!(ms(lobe) > 0.25 * background, "a lobe pass timed below a quarter of the background: {f}");
-            lobes += 1;
-        }
-    }
-    assert!(lobes >= 4, "the strokes' frames have lobe passes: {doc}");
 }

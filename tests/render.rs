@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use brdf_shop::brdf::{Lobe, Material, Normalization};
 use brdf_shop::brush::canvas::Canvas;
 use brdf_shop::reference::{self, Image};
-use brdf_shop::render::{Estimator, Progress, Renderer, Settings, View};
+use brdf_shop::render::{Estimator, Progress, Recorded, Renderer, Settings, View};
 use brdf_shop::scene::{Camera, Environment, Mesh};
 use brdf_shop::vk::Context;
 use glam::{DQuat, DVec3};
@@ -329,7 +329,7 @@ fn refinement_frames_accumulate_on_the_gpu_into_one_estimate() {
     let mut first = None;
     for k in 0..4 {
         r.begin_frame(m).unwrap();
-        r.record(m, &settings(24, 16, Estimator::Mis), Progress::Refine).unwrap();
+        assert_eq!(r.record(m, &settings(24, 16, Estimator::Mis), Progress::Refine).unwrap(), Recorded::Done);
         r.submit_frame(None, None).unwrap();
         assert_eq!(r.refined_samples(), 16 * (k + 1));
         if k == 0 {
@@ -341,7 +341,7 @@ fn refinement_frames_accumulate_on_the_gpu_into_one_estimate() {
     assert!(err < 1e-5, "{err}");
     assert!(reference::relative_l1(&first.unwrap(), &whole).unwrap() > 1e-4);
     r.begin_frame(m).unwrap();
-    r.record(m, &settings(24, 16, Estimator::Mis), Progress::Fresh).unwrap();
+    assert_eq!(r.record(m, &settings(24, 16, Estimator::Mis), Progress::Fresh).unwrap(), Recorded::Done);
     r.submit_frame(None, None).unwrap();
     assert_eq!(r.refined_samples(), 0);
 }
@@ -643,7 +643,7 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
     let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
     let mut frame = |s: &Settings| -> (Vec<String>, Image) {
         r.begin_frame(m).unwrap();
-        r.record(m, s, Progress::Fresh).unwrap();
+        assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
         r.submit_frame(None, None).unwrap();
         let image = r.read_mesh_view().unwrap();
         let names = r.take_finished().into_iter().rev().find(|f| f.timings.iter().any(|t| t.name == "background"));
@@ -656,4 +656,45 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
     assert!(!second.contains(&"gbuffer".to_string()), "{second:?}");
     assert!(third.contains(&"gbuffer".to_string()), "{third:?}");
     assert_eq!(a.pixels, b.pixels);
+}
+
+/// The editor builds new lobe pipelines off its thread (`Renderer::build_in_background`): a mesh view
+/// whose pipelines are not built yet records nothing (`Recorded::Waiting`) and keeps its image —
+/// black for new targets, which are cleared so that compose may read them (the validation layer
+/// checks the layouts) — and each build calls back once its pipeline can be collected; then the view
+/// draws exactly what a headless render of the same frame draws (same seed, same passes).
+#[test]
+fn lobe_pipelines_built_in_the_background_draw_the_same_image() {
+    let mut r = renderer();
+    r.set_environment(&env("studio.exr")).unwrap();
+    r.set_mesh(&Mesh::sphere()).unwrap();
+    let m = &common::feature_materials()[1].1;
+    let s = settings(24, 8, Estimator::Key);
+    let (built, notified) = std::sync::mpsc::channel();
+    r.build_in_background = Some(std::sync::Arc::new(move || {
+        let _ = built.send(());
+    }));
+    r.begin_frame(m).unwrap();
+    assert_eq!(r.record(m, &s, Progress::Fresh).unwrap(), Recorded::Waiting);
+    r.submit_frame(None, None).unwrap();
+    let black = r.read_mesh_view().unwrap();
+    assert!(black.pixels.iter().all(|p| *p == [0.0; 4]), "a new view waiting for its pipelines is not black");
+    let mut frames = 1;
+    loop {
+        notified.recv_timeout(std::time::Duration::from_secs(120)).expect("a background build never called back");
+        r.begin_frame(m).unwrap();
+        let recorded = r.record(m, &s, Progress::Fresh).unwrap();
+        r.submit_frame(None, None).unwrap();
+        frames += 1;
+        if recorded == Recorded::Done {
+            break;
+        }
+        assert!(frames < 16, "still waiting after {frames} frames");
+    }
+    let drawn = r.read_mesh_view().unwrap();
+    r.build_in_background = None;
+    let headless = r.render(m, &s).unwrap().image;
+    assert!(drawn.pixels.iter().any(|p| p[3] > 0.5 && p[0] > 0.0), "the view is empty");
+    assert!(drawn.pixels == headless.pixels, "the view differs from the headless render");
+    r.ctx.check_validation().unwrap();
 }

@@ -171,8 +171,12 @@ impl App {
         };
         let shown = gpu.frame(&plan)?;
         let presented = match shown {
-            Shown::Presented(pixels) => {
-                self.mesh_key = Some(mesh_key);
+            Shown::Presented { pixels, mesh_waiting } => {
+                // A mesh view that waited for its pipelines is rendered again when they are built.
+                self.mesh_waiting = mesh_waiting;
+                if !mesh_waiting {
+                    self.mesh_key = Some(mesh_key);
+                }
                 self.canvas_key = Some(canvas_key);
                 if pixels.is_some() {
                     self.captured = pixels;
@@ -186,6 +190,7 @@ impl App {
             }
         };
         self.apply_panel(actions)?;
+        let kind = if presented && self.mesh_waiting { FrameKind::Waiting } else { kind };
         Ok(presented.then_some(kind))
     }
 }

@@ -169,6 +169,11 @@ impl ApplicationHandler for App {
                 el.set_control_flow(ControlFlow::WaitUntil(at));
             }
         }
+        // A mesh view waiting for a lobe pipeline is drawn again when the build wakes the loop
+        // (`user_event`); until then it neither refines nor quits.
+        if self.mesh_waiting {
+            return;
+        }
         // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast
         // image); once refined, nothing is requested and the loop sleeps until the next event.
         let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());

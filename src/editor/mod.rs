@@ -78,6 +78,9 @@ struct App {
     error: Option<Error>,
     done: bool,
     mesh_key: Option<MeshKey>,
+    /// The mesh view waits for a lobe pipeline being built in the background (it shows its last
+    /// image; the build's end wakes the loop).
+    mesh_waiting: bool,
     canvas_key: Option<CanvasKey>,
     /// The BRDF graph's curves and what they were computed for.
     curves: Option<(CanvasKey, graph::Curves)>,
@@ -167,6 +170,11 @@ impl App {
         let window =
             Arc::new(el.create_window(attrs).map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?);
         let mut gpu = Gpu::new(window)?;
+        // New lobe pipelines are built off the UI thread; the finished build wakes the loop.
+        let proxy = self.proxy.clone();
+        gpu.renderer.build_in_background = Some(Arc::new(move || {
+            let _ = proxy.send_event(());
+        }));
         gpu.renderer.set_environment(&self.env)?;
         gpu.renderer.set_mesh(&self.mesh)?;
         self.egui_state = Some(egui_winit::State::new(
@@ -448,6 +456,7 @@ pub fn run(opts: Options) -> Result<()> {
         error: None,
         done: false,
         mesh_key: None,
+        mesh_waiting: false,
         canvas_key: None,
         curves: None,
         frame_ms: Vec::new(),

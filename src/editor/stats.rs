@@ -3,12 +3,15 @@
 //! writes them as JSON and the panel shows the median frame rate.
 
 /// What a frame rendered of the mesh view: the fast `key` image after a change (an interaction
-/// frame), `REFINE_STEP` more `mis` samples (a refinement frame), or nothing new.
+/// frame), `REFINE_STEP` more `mis` samples (a refinement frame), nothing new, or nothing yet
+/// because a lobe pipeline it needs was being built in the background (a waiting frame: the
+/// canvas and the panel respond, the mesh view shows its last image).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FrameKind {
     Interaction,
     Refinement,
     Unchanged,
+    Waiting,
 }
 
 /// One frame for `--frame-stats`.
@@ -21,7 +24,8 @@ pub struct FrameStat {
 
 /// `{"device", "size": [W, H], "frames": [{"kind", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
 /// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
-/// "refinement": {…}, "skipped_minimised": N, "views": …}` — `skipped_minimised` counts the redraws
+/// "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting` frames are those
+/// whose mesh view waited for a lobe pipeline built in the background; `skipped_minimised` counts the redraws
 /// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
 /// canvas and how (camera, exposure, light), so that a headless render can reproduce them.
 pub fn frame_stats_json(
@@ -36,6 +40,7 @@ pub fn frame_stats_json(
         FrameKind::Interaction => "interaction",
         FrameKind::Refinement => "refinement",
         FrameKind::Unchanged => "unchanged",
+        FrameKind::Waiting => "waiting",
     };
     let summary = |k: FrameKind| {
         let wall: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.wall_ms).collect();
@@ -58,7 +63,7 @@ pub fn frame_stats_json(
         .collect();
     let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
                       "interaction": summary(FrameKind::Interaction), "refinement": summary(FrameKind::Refinement),
-                      "skipped_minimised": skipped_minimised, "views": views });
+                      "waiting": summary(FrameKind::Waiting), "skipped_minimised": skipped_minimised, "views": views });
     let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
     s.push('\n');
     s

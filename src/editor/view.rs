@@ -16,7 +16,7 @@ use winit::window::Window;
 use crate::brdf::Material;
 use crate::error::{Error, Result};
 use crate::render::compose::{Placement, WINDOW_FORMAT};
-use crate::render::{Progress, Renderer, Settings};
+use crate::render::{Progress, Recorded, Renderer, Settings};
 use crate::vk::barrier;
 use crate::vk::frame::FRAMES_IN_FLIGHT;
 use crate::vk::surface::{self, Surface};
@@ -39,8 +39,9 @@ pub struct Plan<'a> {
 
 /// What became of a frame.
 pub enum Shown {
-    /// Presented; the pixels when captured (`RGBA8`, the window's size).
-    Presented(Option<Vec<u8>>),
+    /// Presented; the pixels when captured (`RGBA8`, the window's size), and whether the mesh view
+    /// waited for a lobe pipeline ([`Recorded::Waiting`]: it shows its last image).
+    Presented { pixels: Option<Vec<u8>>, mesh_waiting: bool },
     /// The swapchain no longer fits the window: nothing was drawn; ask for another frame.
     OutOfDate,
 }
@@ -193,13 +194,16 @@ impl Gpu {
                 return Err(e);
             }
         };
-        if let Err(e) = self.record(plan, index) {
-            // The acquire signalled `acquired` and handed out image `index`: consume the one, and
-            // release the other with its swapchain (it cannot be presented unrendered).
-            let _ = self.renderer.abandon_acquired_frame(acquired);
-            let _ = self.drop_swapchain();
-            return Err(e);
-        }
+        let mesh = match self.record(plan, index) {
+            Ok(m) => m,
+            Err(e) => {
+                // The acquire signalled `acquired` and handed out image `index`: consume the one, and
+                // release the other with its swapchain (it cannot be presented unrendered).
+                let _ = self.renderer.abandon_acquired_frame(acquired);
+                let _ = self.drop_swapchain();
+                return Err(e);
+            }
+        };
         let sc = self.swapchain.as_ref().expect("made above");
         let rendered = sc.rendered[index as usize];
         self.renderer.submit_frame(Some((acquired, vk::PipelineStageFlags::ALL_COMMANDS)), Some(rendered))?;
@@ -225,16 +229,19 @@ impl Gpu {
         if !presented {
             self.drop_swapchain()?;
         }
-        Ok(Shown::Presented(pixels))
+        Ok(Shown::Presented { pixels, mesh_waiting: mesh == Recorded::Waiting })
     }
 
     /// Records the frame's GPU work after the swapchain image `index` was acquired.
-    fn record(&mut self, plan: &Plan<'_>, index: u32) -> Result<()> {
+    /// Returns what became of the mesh view (`Done` when it was not asked for).
+    fn record(&mut self, plan: &Plan<'_>, index: u32) -> Result<Recorded> {
+        let mut mesh = Recorded::Done;
         if let Some((settings, progress)) = &plan.mesh {
-            self.renderer.record(plan.material, settings, *progress)?;
+            mesh = self.renderer.record(plan.material, settings, *progress)?;
         }
         if let Some(settings) = &plan.canvas {
-            self.renderer.record(plan.material, settings, Progress::Fresh)?;
+            // A canvas has no lobe pipelines to wait for.
+            let _ = self.renderer.record(plan.material, settings, Progress::Fresh)?;
         }
         let window_image = self.window_image.as_ref().expect("made by frame");
         self.renderer.record_compose(window_image, &plan.placement)?;
@@ -358,6 +365,6 @@ impl Gpu {
                 present,
             );
         }
-        Ok(())
+        Ok(mesh)
     }
 }

@@ -109,7 +109,7 @@ fn frames_of(
         };
         let canvas = Settings { width: l.canvas, height: l.canvas, view: View::Canvas, ..mesh.clone() };
         let recorded =
-            r.record(m, &mesh, Progress::Fresh).and_then(|()| r.record(m, &canvas, Progress::Fresh)).and_then(|()| {
+            r.record(m, &mesh, Progress::Fresh).and_then(|_| r.record(m, &canvas, Progress::Fresh)).and_then(|_| {
                 let p = Placement {
                     mesh: (l.mesh_x, l.mesh_w, l.height),
                     canvas: (l.canvas_x, l.canvas),

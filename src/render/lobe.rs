@@ -1,8 +1,14 @@
 //! Pass 3 (paper §4), one dispatch per lobe: Halton QMC importance sampling of the rotated Ward
 //! lobe, four samples at a time, reading the prefiltered environment (or level 0 for `plain`).
-//! One pipeline per combination of specialisation constants a scene needs, built on first use.
+//! One pipeline per combination of specialisation constants a scene needs, built on first use:
+//! at once for a headless render, or on a thread of its own for the editor (a new lobe variant
+//! costs 0.3–0.5 s of LLVM on lavapipe, which would stall the window; the mesh view keeps its last
+//! image until the pipeline is there).
 
 use std::collections::HashMap;
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
 
 use ash::vk;
 
@@ -159,25 +165,100 @@ pub struct Job<'a> {
     pub light_samples: Option<(&'a Buffer, u32, [f32; 2])>,
 }
 
+/// Called on the building thread when a pipeline built in the background is ready.
+pub type Notify = Arc<dyn Fn() + Send + Sync>;
+
 pub struct LobePass {
     pipelines: HashMap<Variant, Pipeline>,
+    /// Pipelines being built on threads of their own ([`LobePass::ready`]); each thread sends its
+    /// pipeline on `built` before it calls its `Notify`, so whoever is notified finds it there.
+    building: HashMap<Variant, JoinHandle<()>>,
+    built: (Sender<Built>, Receiver<Built>),
+}
+
+/// What a building thread sends: its variant and pipeline.
+type Built = (Variant, Result<Pipeline>);
+
+fn build(raw: &ash::Device, v: &Variant) -> Result<Pipeline> {
+    let name = format!("lobe[{}]", v.tag());
+    Pipeline::compute_on(raw, crate::spirv!("lobe.comp"), &name, &BINDINGS, 128, &v.constants())
 }
 
 impl LobePass {
     pub fn new() -> LobePass {
-        LobePass { pipelines: HashMap::new() }
+        LobePass { pipelines: HashMap::new(), building: HashMap::new(), built: channel() }
     }
 
-    /// Builds the pipelines of `variants` not built yet.
+    /// Takes in the pipelines the building threads have sent (the first error, after taking all).
+    fn collect(&mut self, ctx: &Context) -> Result<()> {
+        let mut failed = None;
+        while let Ok((v, p)) = self.built.1.try_recv() {
+            if let Some(thread) = self.building.remove(&v) {
+                // It has sent its one message; what is left of it is returning.
+                let _ = thread.join();
+            }
+            match p {
+                Ok(p) => {
+                    p.name(ctx, &format!("lobe[{}]", v.tag()));
+                    self.pipelines.insert(v, p);
+                }
+                Err(e) => failed = failed.or(Some(e)),
+            }
+        }
+        failed.map_or(Ok(()), Err)
+    }
+
+    /// Builds the pipelines of `variants` not built yet, waiting for those being built.
     pub fn prepare(&mut self, ctx: &Context, variants: &[Variant]) -> Result<()> {
         for v in variants {
+            if let Some(thread) = self.building.remove(v) {
+                // It sends its pipeline before it returns.
+                let _ = thread.join();
+            }
+        }
+        self.collect(ctx)?;
+        for v in variants {
             if !self.pipelines.contains_key(v) {
-                let name = format!("lobe[{}]", v.tag());
-                let p = Pipeline::compute(ctx, crate::spirv!("lobe.comp"), &name, &BINDINGS, 128, &v.constants())?;
+                let p = build(ctx.raw(), v)?;
+                p.name(ctx, &format!("lobe[{}]", v.tag()));
                 self.pipelines.insert(*v, p);
             }
         }
         Ok(())
+    }
+
+    /// Whether every pipeline of `variants` is built; those that are not are started on threads of
+    /// their own (one per variant), each calling `notify` once its pipeline can be collected.
+    pub fn ready(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<bool> {
+        self.collect(ctx)?;
+        // A thread that has ended sent its pipeline first, unless it panicked.
+        if self.building.values().any(|t| t.is_finished()) {
+            self.collect(ctx)?;
+            if self.building.values().any(|t| t.is_finished()) {
+                return Err(crate::Error::NoDevice("the thread building a lobe pipeline panicked".into()));
+            }
+        }
+        let mut ready = true;
+        for v in variants {
+            if self.pipelines.contains_key(v) {
+                continue;
+            }
+            ready = false;
+            if !self.building.contains_key(v) {
+                let (raw, variant, notify, sender) = (ctx.raw().clone(), *v, notify.clone(), self.built.0.clone());
+                // The device outlives the thread: `destroy` joins it before the renderer lets the
+                // device go.
+                let thread = std::thread::Builder::new()
+                    .name("lobe pipeline".into())
+                    .spawn(move || {
+                        let _ = sender.send((variant, build(&raw, &variant)));
+                        notify();
+                    })
+                    .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
+                self.building.insert(*v, thread);
+            }
+        }
+        Ok(ready)
     }
 
     /// Adds one lobe as `job` says into the image.
@@ -225,7 +306,15 @@ impl LobePass {
         Ok(())
     }
 
-    pub fn destroy(self, ctx: &Context) {
+    pub fn destroy(mut self, ctx: &Context) {
+        for (_, thread) in self.building.drain() {
+            let _ = thread.join();
+        }
+        while let Ok((_, p)) = self.built.1.try_recv() {
+            if let Ok(p) = p {
+                p.destroy(ctx);
+            }
+        }
         for (_, p) in self.pipelines {
             p.destroy(ctx);
         }

@@ -44,7 +44,9 @@ use mesh::GpuMesh;
 use targets::Targets;
 
 pub use record::Recording;
-pub use settings::{check_limits, key_light_samples, Estimator, Frame, Progress, Settings, View, MAX_PIXELS, MAX_SPP};
+pub use settings::{
+    check_limits, key_light_samples, Estimator, Frame, Progress, Recorded, Settings, View, MAX_PIXELS, MAX_SPP,
+};
 
 struct Passes {
     gbuffer: gbuffer::GBufferPass,
@@ -103,6 +105,9 @@ pub struct Renderer {
     /// lights off their residual map (`keylight::WideLights`); false leaves them in it (a test
     /// compares the two).
     pub wide_lights: bool,
+    /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
+    /// editor); `None` builds them at once (headless commands).
+    pub build_in_background: Option<lobe::Notify>,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -138,6 +143,7 @@ impl Renderer {
             light_reach_test: true,
             wide_lights: true,
             seed: 0,
+            build_in_background: None,
             passes: Some(passes),
             env: None,
             mesh: None,
@@ -252,7 +258,7 @@ impl Renderer {
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
         self.begin_frame(material)?;
-        let recorded = self.record_view(material, settings, Progress::Fresh, false).and_then(|()| {
+        let recorded = self.record_view(material, settings, Progress::Fresh, false).and_then(|_| {
             let (w, h) = (settings.width, settings.height);
             if self.readback.as_ref().is_none_or(|b| b.size != w as u64 * h as u64 * 16) {
                 self.idle()?;

@@ -7,7 +7,9 @@ use ash::vk;
 use super::environment::GpuEnvironment;
 use super::gpu::{self, Push};
 use super::targets::Targets;
-use super::{compact, compose, key_light_samples, lobe, Estimator, Progress, Renderer, Settings, View, MAX_SPP};
+use super::{
+    compact, compose, key_light_samples, lobe, Estimator, Progress, Recorded, Renderer, Settings, View, MAX_SPP,
+};
 use crate::brdf::Material;
 use crate::error::{Error, Result};
 use crate::scene::Camera;
@@ -96,7 +98,9 @@ impl Renderer {
     /// Records one view of `material` into the current frame (begun by [`Renderer::begin_frame`]),
     /// into that view's persistent targets. `Progress::Refine` adds `settings.spp` more `mis` samples
     /// to the mesh view's running sum (continuing its sequence); `Fresh` restarts it.
-    pub fn record(&mut self, material: &Material, settings: &Settings, progress: Progress) -> Result<()> {
+    /// With [`Renderer::build_in_background`] set, a mesh view whose lobe pipelines are still being
+    /// built records nothing and keeps its last image ([`Recorded::Waiting`]).
+    pub fn record(&mut self, material: &Material, settings: &Settings, progress: Progress) -> Result<Recorded> {
         self.record_view(material, settings, progress, true)
     }
 
@@ -108,7 +112,7 @@ impl Renderer {
         settings: &Settings,
         progress: Progress,
         reuse: bool,
-    ) -> Result<()> {
+    ) -> Result<Recorded> {
         self.check_size(settings)?;
         let refine = matches!(progress, Progress::Refine) && settings.view == View::Mesh;
         if refine && settings.estimator != Estimator::Mis {
@@ -174,7 +178,22 @@ impl Renderer {
             self.buffers_for(offset.saturating_add(settings.spp), settings.spp, settings.estimator)?;
             if settings.estimator != Estimator::Mis {
                 let variants: Vec<_> = lobes.iter().map(|l| l.1).collect();
-                self.passes.as_mut().expect("passes live until drop").lobe.prepare(&self.ctx, &variants)?;
+                let lobe = &mut self.passes.as_mut().expect("passes live until drop").lobe;
+                match &self.build_in_background {
+                    Some(notify) => {
+                        if !lobe.ready(&self.ctx, &variants, notify)? {
+                            // New targets show black until the view is drawn (compose reads them).
+                            let targets = self.views[slot].as_mut().expect("made above");
+                            if !targets.drawn {
+                                let cmd = self.ring.as_mut().expect("ring lives until drop").current().cmd;
+                                targets.accum.clear_to_general(&self.ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                                targets.drawn = true;
+                            }
+                            return Ok(Recorded::Waiting);
+                        }
+                    }
+                    None => lobe.prepare(&self.ctx, &variants)?,
+                }
             }
         }
         let ctx = &self.ctx;
@@ -219,7 +238,9 @@ impl Renderer {
         push.light = gpu::vec4(settings.light, settings.intensity as f32);
         let rec = Recording { ctx, cmd, pool, push, targets, env: self.env.as_ref() };
         if !mesh_view {
-            return ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf));
+            ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf))?;
+            self.views[slot].as_mut().expect("made above").drawn = true;
+            return Ok(Recorded::Done);
         }
         let mesh = self.mesh.as_ref().expect("checked above");
         let vp = settings.camera.view_proj(w, h);
@@ -268,7 +289,9 @@ impl Renderer {
         } else {
             self.refined = 0;
         }
-        self.views[slot].as_mut().expect("made above").gbuffer_of = gbuffer_key;
-        Ok(())
+        let targets = self.views[slot].as_mut().expect("made above");
+        targets.gbuffer_of = gbuffer_key;
+        targets.drawn = true;
+        Ok(Recorded::Done)
     }
 }

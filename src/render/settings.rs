@@ -105,6 +105,17 @@ pub struct Frame {
     pub timings: Vec<PassTime>,
 }
 
+/// What [`super::Renderer::record`] put in the frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[must_use]
+pub enum Recorded {
+    /// The view's passes.
+    Done,
+    /// Nothing: a lobe pipeline the view needs is being built in the background; the view keeps its
+    /// last image.
+    Waiting,
+}
+
 /// How a mesh view frame relates to the ones before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Progress {

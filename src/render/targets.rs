@@ -24,6 +24,9 @@ pub struct Targets {
     pub pixels: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
+    /// `accum` holds an image (a view was recorded into it, or it was cleared for a view waiting
+    /// for its pipelines); false for new targets, whose images are undefined.
+    pub drawn: bool,
 }
 
 /// What a G-buffer was rasterised from.
@@ -49,7 +52,7 @@ impl Targets {
                 (width, height),
                 vk::Format::R32G32B32A32_SFLOAT,
                 1,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST,
                 "accum",
             )?);
             made.push(Image::new(
@@ -83,6 +86,7 @@ impl Targets {
             sum: next(),
             pixels,
             gbuffer_of: None,
+            drawn: false,
         })
     }
 

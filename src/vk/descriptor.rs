@@ -13,6 +13,17 @@ pub fn layout(
     stages: vk::ShaderStageFlags,
     name: &str,
 ) -> Result<vk::DescriptorSetLayout> {
+    let l = layout_on(ctx.raw(), types, stages)?;
+    ctx.device.set_name(l, name);
+    Ok(l)
+}
+
+/// [`layout`] through a device handle alone (a pipeline built on another thread), unnamed.
+pub fn layout_on(
+    raw: &ash::Device,
+    types: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::DescriptorSetLayout> {
     let bindings: Vec<_> = types
         .iter()
         .enumerate()
@@ -26,10 +37,7 @@ pub fn layout(
         .collect();
     let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
     // SAFETY: the device is live; the layout is destroyed by its owner.
-    let l = unsafe { ctx.raw().create_descriptor_set_layout(&info, None) }
-        .map_err(vk_err("vkCreateDescriptorSetLayout"))?;
-    ctx.device.set_name(l, name);
-    Ok(l)
+    unsafe { raw.create_descriptor_set_layout(&info, None) }.map_err(vk_err("vkCreateDescriptorSetLayout"))
 }
 
 /// A pool big enough for `sets` sets of up to 16 descriptors of each type the renderer uses.

@@ -104,6 +104,25 @@ impl Image {
         super::barrier::image(ctx, cmd, self.raw, range(self.aspect, self.mip_levels), (from, to), src, dst);
     }
 
+    /// Clears the image (a colour image made with `TRANSFER_DST`) to zero in `GENERAL`, ready for `dst`.
+    pub fn clear_to_general(&self, ctx: &Context, cmd: vk::CommandBuffer, dst: super::barrier::Scope) {
+        use super::barrier::{EARLIER_READS, TRANSFER_WRITE};
+        self.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL, EARLIER_READS, TRANSFER_WRITE);
+        let ranges = [range(self.aspect, self.mip_levels)];
+        // SAFETY: `cmd` is recording outside a render pass; the image is in GENERAL (above) and was
+        // made with TRANSFER_DST (the caller's contract).
+        unsafe {
+            ctx.raw().cmd_clear_color_image(
+                cmd,
+                self.raw,
+                vk::ImageLayout::GENERAL,
+                &vk::ClearColorValue::default(),
+                &ranges,
+            )
+        };
+        self.barrier(ctx, cmd, vk::ImageLayout::GENERAL, vk::ImageLayout::GENERAL, TRANSFER_WRITE, dst);
+    }
+
     /// Makes the image writable in `GENERAL` by `dst`, dropping its contents once earlier frames'
     /// reads of it are done (the persistent targets are rewritten each frame).
     pub fn discard_to_general(&self, ctx: &Context, cmd: vk::CommandBuffer, dst: super::barrier::Scope) {

@@ -15,28 +15,25 @@ pub struct Pipeline {
     pub push_stages: vk::ShaderStageFlags,
 }
 
+/// The set layout and pipeline layout, unnamed (see [`Pipeline::name`]).
 fn layouts(
-    ctx: &Context,
+    raw: &ash::Device,
     bindings: &[vk::DescriptorType],
     stages: vk::ShaderStageFlags,
     push_size: u32,
-    name: &str,
 ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
-    let set_layout = descriptor::layout(ctx, bindings, stages, &format!("{name}.set"))?;
+    let set_layout = descriptor::layout_on(raw, bindings, stages)?;
     let set_layouts = [set_layout];
     let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
     let info = vk::PipelineLayoutCreateInfo::default()
         .set_layouts(&set_layouts)
         .push_constant_ranges(if push_size > 0 { &ranges[..] } else { &[] });
     // SAFETY: the set layout is live; the pipeline layout is destroyed with the pipeline.
-    match unsafe { ctx.raw().create_pipeline_layout(&info, None) } {
-        Ok(l) => {
-            ctx.device.set_name(l, &format!("{name}.layout"));
-            Ok((set_layout, l))
-        }
+    match unsafe { raw.create_pipeline_layout(&info, None) } {
+        Ok(l) => Ok((set_layout, l)),
         Err(result) => {
             // SAFETY: unused.
-            unsafe { ctx.raw().destroy_descriptor_set_layout(set_layout, None) };
+            unsafe { raw.destroy_descriptor_set_layout(set_layout, None) };
             Err(vk_err("vkCreatePipelineLayout")(result))
         }
     }
@@ -44,19 +41,16 @@ fn layouts(
 
 /// The pipeline of a `vkCreate*Pipelines` result, or its layouts destroyed and the error.
 fn finish(
-    ctx: &Context,
+    raw: &ash::Device,
     created: std::result::Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)>,
     shell: Pipeline,
     call: &'static str,
-    name: &str,
 ) -> Result<Pipeline> {
     match created {
-        Ok(p) => {
-            ctx.device.set_name(p[0], name);
-            Ok(Pipeline { raw: p[0], ..shell })
-        }
+        Ok(p) => Ok(Pipeline { raw: p[0], ..shell }),
         Err((_, result)) => {
-            shell.destroy(ctx);
+            // SAFETY: the layouts were never used by a pipeline.
+            unsafe { shell.destroy_on(raw) };
             Err(vk_err(call)(result))
         }
     }
@@ -72,13 +66,28 @@ impl Pipeline {
         push_size: u32,
         spec: &[u32],
     ) -> Result<Pipeline> {
+        let p = Pipeline::compute_on(ctx.raw(), spv, name, bindings, push_size, spec)?;
+        p.name(ctx, name);
+        Ok(p)
+    }
+
+    /// [`Pipeline::compute`] through a device handle alone, unnamed: what a thread that compiles
+    /// pipelines in the background calls (the caller names it with [`Pipeline::name`]).
+    pub fn compute_on(
+        raw: &ash::Device,
+        spv: &[u8],
+        name: &str,
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        spec: &[u32],
+    ) -> Result<Pipeline> {
         let stages = vk::ShaderStageFlags::COMPUTE;
-        let module = shader::module(ctx, spv, name)?;
-        let (set_layout, layout) = match layouts(ctx, bindings, stages, push_size, name) {
+        let module = shader::module_on(raw, spv, name)?;
+        let (set_layout, layout) = match layouts(raw, bindings, stages, push_size) {
             Ok(l) => l,
             Err(e) => {
                 // SAFETY: unused.
-                unsafe { ctx.raw().destroy_shader_module(module, None) };
+                unsafe { raw.destroy_shader_module(module, None) };
                 return Err(e);
             }
         };
@@ -94,9 +103,9 @@ impl Pipeline {
             .specialization_info(&spec_info);
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         // SAFETY: module and layout are live; the infos outlive the call.
-        let created = unsafe { ctx.raw().create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        let created = unsafe { raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
         // SAFETY: a module may be destroyed once the pipeline is created.
-        unsafe { ctx.raw().destroy_shader_module(module, None) };
+        unsafe { raw.destroy_shader_module(module, None) };
         let p = Pipeline {
             raw: vk::Pipeline::null(),
             layout,
@@ -104,7 +113,14 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_stages: stages,
         };
-        finish(ctx, created, p, "vkCreateComputePipelines", name)
+        finish(raw, created, p, "vkCreateComputePipelines")
+    }
+
+    /// Names the pipeline and its layouts for the validation layer and debuggers.
+    pub fn name(&self, ctx: &Context, name: &str) {
+        ctx.device.set_name(self.raw, name);
+        ctx.device.set_name(self.layout, &format!("{name}.layout"));
+        ctx.device.set_name(self.set_layout, &format!("{name}.set"));
     }
 
     /// The G-buffer pipeline: vertex buffer of `stride` bytes with `attributes` (location, format,
@@ -138,7 +154,7 @@ impl Pipeline {
                 ctx.raw().destroy_shader_module(fs, None);
             }
         };
-        let (set_layout, layout) = match layouts(ctx, bindings, stages, push_size, name) {
+        let (set_layout, layout) = match layouts(ctx.raw(), bindings, stages, push_size) {
             Ok(l) => l,
             Err(e) => {
                 destroy_modules();
@@ -212,7 +228,9 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_stages: stages,
         };
-        finish(ctx, created, p, "vkCreateGraphicsPipelines", name)
+        let p = finish(ctx.raw(), created, p, "vkCreateGraphicsPipelines")?;
+        p.name(ctx, name);
+        Ok(p)
     }
 
     /// Binds the pipeline, its descriptor set and the push constants.
@@ -228,13 +246,22 @@ impl Pipeline {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: the GPU no longer uses the pipeline (work is waited on); each object once.
+        // SAFETY: the GPU no longer uses the pipeline (work is waited on).
+        unsafe { self.destroy_on(ctx.raw()) };
+    }
+
+    /// Destroys the pipeline and its layouts, each once.
+    ///
+    /// # Safety
+    /// `raw` is the device the pipeline was made on, and no pending GPU work uses the pipeline.
+    pub unsafe fn destroy_on(self, raw: &ash::Device) {
+        // SAFETY: the caller's contract; each object is destroyed once (the pipeline by value).
         unsafe {
             if self.raw != vk::Pipeline::null() {
-                ctx.raw().destroy_pipeline(self.raw, None);
+                raw.destroy_pipeline(self.raw, None);
             }
-            ctx.raw().destroy_pipeline_layout(self.layout, None);
-            ctx.raw().destroy_descriptor_set_layout(self.set_layout, None);
+            raw.destroy_pipeline_layout(self.layout, None);
+            raw.destroy_descriptor_set_layout(self.set_layout, None);
         }
     }
 }

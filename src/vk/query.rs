@@ -71,7 +71,9 @@ impl Timestamps {
             let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
             // SAFETY: `cmd` is recording outside a render pass; the query was written just above;
             // `settle` holds 8 bytes per query and is a transfer destination.
-            unsafe { ctx.raw().cmd_copy_query_pool_results(cmd, self.pool, index, 1, settle.raw, 8 * index as u64, 8, flags) };
+            unsafe {
+                ctx.raw().cmd_copy_query_pool_results(cmd, self.pool, index, 1, settle.raw, 8 * index as u64, 8, flags)
+            };
         }
     }
 

@@ -15,11 +15,16 @@ macro_rules! spirv {
 }
 
 pub fn module(ctx: &Context, spv: &[u8], name: &str) -> Result<vk::ShaderModule> {
+    let m = module_on(ctx.raw(), spv, name)?;
+    ctx.device.set_name(m, name);
+    Ok(m)
+}
+
+/// [`module`] through a device handle alone (a pipeline built on another thread), unnamed.
+pub fn module_on(raw: &ash::Device, spv: &[u8], name: &str) -> Result<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spv))
         .map_err(|e| Error::input(name, format!("embedded SPIR-V is malformed: {e}")))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
     // SAFETY: `words` is SPIR-V produced by shaderc; the module is destroyed by its owner.
-    let m = unsafe { ctx.raw().create_shader_module(&info, None) }.map_err(vk_err("vkCreateShaderModule"))?;
-    ctx.device.set_name(m, name);
-    Ok(m)
+    unsafe { raw.create_shader_module(&info, None) }.map_err(vk_err("vkCreateShaderModule"))
 }
