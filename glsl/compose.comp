@@ -11,7 +11,15 @@ layout(push_constant) uniform Push {
     uvec4 views;        // mesh view x, width; canvas x, side
     vec4 scale;         // mesh view scale (exposure / frames), canvas exposure, marker x, y (pixels)
     vec4 background;    // window grey, 0..1 per channel
+    uvec4 region;       // the rectangle this dispatch writes: x, y, width, height
 } pc;
+
+// What this pipeline writes (the others' pixels are left as they are; an `if` runs both sides on
+// llvmpipe, so each part is a pipeline of its own): 1 the mesh view, 2 the canvas, 4 the grey.
+layout(constant_id = 0) const uint PARTS = 7u;
+const bool MESH = (PARTS & 1u) != 0u;
+const bool CANVAS = (PARTS & 2u) != 0u;
+const bool GREY = (PARTS & 4u) != 0u;
 
 vec3 srgb(vec3 v) {
     vec3 x = clamp(v, 0.0, 1.0);
@@ -20,19 +28,24 @@ vec3 srgb(vec3 v) {
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 p = ivec2(pc.region.xy + gl_GlobalInvocationID.xy);
+    if (gl_GlobalInvocationID.x >= pc.region.z || gl_GlobalInvocationID.y >= pc.region.w) return;
     if (p.x >= int(pc.window_size.x) || p.y >= int(pc.window_size.y)) return;
     vec3 c = pc.background.rgb;
     int mx = int(pc.views.x), mw = int(pc.views.y), cx = int(pc.views.z), cs = int(pc.views.w);
-    if (p.x >= mx && p.x < mx + mw && p.y < int(pc.window_size.z)) {
+    bool in_mesh = p.x >= mx && p.x < mx + mw && p.y < int(pc.window_size.z);
+    bool in_canvas = !in_mesh && p.x >= cx && p.x < cx + cs && p.y < cs;
+    if (MESH && in_mesh) {
         c = srgb(imageLoad(mesh, ivec2(p.x - mx, p.y)).rgb * pc.scale.x);
-    } else if (p.x >= cx && p.x < cx + cs && p.y < cs) {
+    } else if (CANVAS && in_canvas) {
         c = srgb(imageLoad(canvas, ivec2(p.x - cx, p.y)).rgb * pc.scale.y);
         ivec2 m = ivec2(pc.scale.zw);
         ivec2 d = abs(p - m);
         if (pc.window_size.w == 1u && ((d.y == 0 && d.x <= 6) || (d.x == 0 && d.y <= 6))) {
             c = vec3(255.0, 210.0, 60.0) / 255.0;
         }
+    } else if (!GREY || in_mesh || in_canvas) {
+        return;
     }
     imageStore(window, p, vec4(c, 1.0));
 }

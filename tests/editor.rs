@@ -140,10 +140,11 @@ fn idle_frames_refine_the_mesh_view() {
     assert_eq!(canvases.count(), 1, "{doc}");
     for f in frames {
         let (wall, gpu) = (f["wall_ms"].as_f64().unwrap(), f["gpu_ms"].as_f64().unwrap());
-        assert!(gpu > 0.0 && wall > 0.0, "{f}");
         let passes = f["passes"].as_array().unwrap();
         let has = |n: &str| passes.iter().any(|p| p["name"] == n);
-        assert!(has("compose"), "{f}");
+        // (A frame waiting for the mesh view's pipelines may have nothing new to compose.)
+        assert!(f["kind"] == "waiting" || (gpu > 0.0 && has("compose")), "{f}");
+        assert!(wall > 0.0, "{f}");
         let ms = |n: &str| passes.iter().filter(|p| p["name"] == n).map(|p| p["ms"].as_f64().unwrap()).sum::<f64>();
         if f["kind"] == "refinement" {
             assert!(has("mis") && has("accumulate") && !has("canvas"), "{f}");

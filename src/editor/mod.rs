@@ -333,7 +333,8 @@ impl App {
             let (_, wall_ms, kind) = self.in_flight.remove(k);
             let passes: Vec<(String, f64)> = f.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
             if kind != FrameKind::Unchanged {
-                let gpu_ms = passes.iter().map(|t| t.1).sum();
+                // (+ 0.0: the sum of no passes is -0.0.)
+                let gpu_ms = passes.iter().map(|t| t.1).sum::<f64>() + 0.0;
                 self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, passes: passes.clone() });
             }
             self.timings = passes;

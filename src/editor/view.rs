@@ -15,7 +15,7 @@ use winit::window::Window;
 
 use crate::brdf::Material;
 use crate::error::{Error, Result};
-use crate::render::compose::{Placement, WINDOW_FORMAT};
+use crate::render::compose::{Parts, Placement, WINDOW_FORMAT};
 use crate::render::{Progress, Recorded, Renderer, Settings};
 use crate::vk::barrier;
 use crate::vk::frame::FRAMES_IN_FLIGHT;
@@ -51,8 +51,10 @@ pub struct Gpu {
     ui: Option<egui_ash_renderer::Renderer>,
     /// The format the painter was made for (the swapchain's).
     ui_format: vk::Format,
-    /// The composed views (`RGBA8`, the window's size).
+    /// The composed views (`RGBA8`, the window's size), and the placement last composed into it
+    /// (a frame rewrites only what changed).
     window_image: Option<Image>,
+    composed: Option<Placement>,
     pub swapchain: Option<Swapchain>,
     surface: Option<Surface>,
     /// Host-visible copy of a captured frame.
@@ -111,6 +113,7 @@ impl Gpu {
             ui: None,
             ui_format: vk::Format::UNDEFINED,
             window_image: None,
+            composed: None,
             swapchain: None,
             surface: Some(surface),
             capture: None,
@@ -170,6 +173,7 @@ impl Gpu {
             let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
             self.window_image =
                 Some(Image::new(&self.renderer.ctx, (w, h), WINDOW_FORMAT, 1, usage, "window.composed")?);
+            self.composed = None;
         }
         self.renderer.begin_frame(plan.material)?;
         let number = self.renderer.frame_number();
@@ -244,7 +248,15 @@ impl Gpu {
             let _ = self.renderer.record(plan.material, settings, Progress::Fresh)?;
         }
         let window_image = self.window_image.as_ref().expect("made by frame");
-        self.renderer.record_compose(window_image, &plan.placement)?;
+        let (now, was) = (&plan.placement, self.composed.as_ref());
+        let parts = Parts {
+            mesh: (plan.mesh.is_some() && mesh == Recorded::Done) || was.is_none_or(|p| p.mesh_scale != now.mesh_scale),
+            canvas: plan.canvas.is_some()
+                || was.is_none_or(|p| (p.canvas_scale, p.marker) != (now.canvas_scale, now.marker)),
+            all: was.is_none_or(|p| (p.mesh, p.canvas) != (now.mesh, now.canvas)),
+        };
+        self.renderer.record_compose(window_image, now, parts)?;
+        self.composed = Some(*now);
         let ctx = &self.renderer.ctx;
         let ui = self.ui.as_mut().expect("made with the swapchain");
         ui.set_textures(ctx.device.queue, ctx.commands.pool, &plan.ui.0.set)

@@ -8,7 +8,7 @@
 use crate::brdf::Material;
 use crate::editor::state::Layout;
 use crate::error::Result;
-use crate::render::compose::{Placement, WINDOW_FORMAT};
+use crate::render::compose::{Parts, Placement, WINDOW_FORMAT};
 use crate::render::{Estimator, Progress, Renderer, Settings, View};
 use crate::scene::{Camera, Mesh};
 use crate::vk::Image;
@@ -117,7 +117,10 @@ fn frames_of(
                     canvas_scale: 1.0,
                     marker: None,
                 };
-                r.record_compose(window, &p)
+                // The orbiting camera changes the mesh view and the canvas every frame; the grey
+                // is written once.
+                let parts = Parts { mesh: true, canvas: true, all: i == 0 };
+                r.record_compose(window, &p, parts)
             });
         if let Err(e) = recorded {
             let _ = r.abandon_frame();

@@ -78,7 +78,16 @@ impl Renderer {
     /// Records, into the current frame, the composed window image `window`: the mesh view (the
     /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
     /// says (its `mesh_scale` is multiplied by 1 / frames here).
-    pub fn record_compose(&mut self, window: &crate::vk::Image, placement: &compose::Placement) -> Result<()> {
+    /// Only the `parts` that changed are written (`compose::Parts`); nothing when none did.
+    pub fn record_compose(
+        &mut self,
+        window: &crate::vk::Image,
+        placement: &compose::Placement,
+        parts: compose::Parts,
+    ) -> Result<()> {
+        if !parts.any() {
+            return Ok(());
+        }
         let (Some(mesh), Some(canvas)) =
             (self.views[View::Mesh as usize].as_ref(), self.views[View::Canvas as usize].as_ref())
         else {
@@ -91,7 +100,7 @@ impl Renderer {
         let f = ring.current();
         let (cmd, pool) = (f.cmd, f.pool);
         f.timestamps.time(&self.ctx, cmd, "compose", || {
-            passes.compose.record(&self.ctx, cmd, pool, window, (image, &canvas.accum), &p)
+            passes.compose.record(&self.ctx, cmd, pool, window, (image, &canvas.accum), &p, parts)
         })
     }
 
