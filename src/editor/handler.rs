@@ -129,8 +129,10 @@ impl ApplicationHandler for App {
         if self.state.is_none() {
             return;
         }
-        // Replayed inputs go through the same handler, one stroke per turn of the loop.
-        if !self.pending.is_empty() {
+        // Replayed inputs go through the same handler, one stroke per turn of the loop; a script
+        // (strokes, drops, window changes) goes on once the mesh view shows the last step, not while
+        // it waits for a lobe pipeline built in the background (the build's end wakes the loop).
+        if !self.pending.is_empty() && !self.mesh_waiting {
             while let Some(i) = self.pending.pop_front() {
                 let release = matches!(i, Input::Button { pressed: false, .. });
                 if let Err(e) = self.handle(i) {
@@ -145,7 +147,7 @@ impl ApplicationHandler for App {
             return;
         }
         el.set_control_flow(ControlFlow::Wait);
-        if self.window_script_turn(el) {
+        if !self.mesh_waiting && self.window_script_turn(el) {
             return;
         }
         // A minimised window draws nothing and does not refine (nor quit: a `--screenshot` waits
