@@ -94,8 +94,15 @@ pub fn material_bytes(m: &Material) -> Vec<u8> {
     }
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
     bytes.extend_from_slice(bytemuck::cast_slice(&lobes));
+    // Whole, for the passes that read it as a uniform buffer (`material.glsl`, MATERIAL_UNIFORM).
+    bytes.resize(bytes.len().max(MATERIAL_UNIFORM_BYTES), 0);
     bytes
 }
+
+/// The material's uniform block: the header and `MAX_LOBES` lobes (16 416 bytes; every Vulkan
+/// device reads uniform buffers of 16 384 bytes, lavapipe and desktop GPUs 64 KiB).
+pub const MATERIAL_UNIFORM_BYTES: usize =
+    std::mem::size_of::<GpuMaterialHeader>() + crate::brdf::material::MAX_LOBES * std::mem::size_of::<GpuLobe>();
 
 /// The paper's precomputed sequence: Halton points `(ξ₁, ξ₂)` in bases 2 and 3 from index 1 (index 0
 /// would give `ξ₁ = 0`), packed four to a group; the last group's missing lanes are marked invalid.

@@ -67,6 +67,7 @@ pub fn allocate(ctx: &Context, pool: vk::DescriptorPool, layout: vk::DescriptorS
 /// What one binding points at.
 pub enum Binding<'a> {
     Storage(&'a Buffer),
+    Uniform(&'a Buffer),
     StorageImage(vk::ImageView),
     Sampled(vk::ImageView, vk::Sampler),
 }
@@ -76,7 +77,7 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
     let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
         .iter()
         .map(|b| match b {
-            Binding::Storage(buf) => [buf.descriptor()],
+            Binding::Storage(buf) | Binding::Uniform(buf) => [buf.descriptor()],
             _ => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
@@ -98,12 +99,10 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
         .enumerate()
         .map(|(i, b)| {
             let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32);
+            let w = w.descriptor_type(b.ty());
             match b {
-                Binding::Storage(_) => w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&buffers[i]),
-                Binding::StorageImage(_) => w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(&images[i]),
-                Binding::Sampled(..) => {
-                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(&images[i])
-                }
+                Binding::Storage(_) | Binding::Uniform(_) => w.buffer_info(&buffers[i]),
+                Binding::StorageImage(_) | Binding::Sampled(..) => w.image_info(&images[i]),
             }
         })
         .collect();
@@ -115,6 +114,7 @@ impl Binding<'_> {
     pub fn ty(&self) -> vk::DescriptorType {
         match self {
             Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
             Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         }

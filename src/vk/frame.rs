@@ -88,7 +88,8 @@ impl Frame {
                 old.destroy(ctx);
             }
             let size = (bytes.len() as u64).next_power_of_two().max(256);
-            let b = Buffer::new(ctx, size, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::CpuToGpu, name)?;
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_BUFFER;
+            let b = Buffer::new(ctx, size, usage, MemoryLocation::CpuToGpu, name)?;
             self.buffers.insert(name, b);
         }
         self.buffers.get_mut(name).expect("made above").write(bytes);
