@@ -117,7 +117,9 @@ impl App {
         } else {
             refined
         };
-        let quality = if shown_refined == 0 {
+        let quality = if self.mesh_waiting && kind == FrameKind::Interaction {
+            "mesh view: building the new lobe's shader…".to_string()
+        } else if shown_refined == 0 {
             format!("mesh view: key {} spp", self.spp)
         } else {
             format!("mesh view: mis {shown_refined} spp")
