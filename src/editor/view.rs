@@ -201,6 +201,8 @@ impl Gpu {
         let mesh = match self.record(plan, index) {
             Ok(m) => m,
             Err(e) => {
+                // Nothing of this frame reaches the window image: compose it whole next time.
+                self.composed = None;
                 // The acquire signalled `acquired` and handed out image `index`: consume the one, and
                 // release the other with its swapchain (it cannot be presented unrendered).
                 let _ = self.renderer.abandon_acquired_frame(acquired);

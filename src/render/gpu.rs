@@ -99,8 +99,9 @@ pub fn material_bytes(m: &Material) -> Vec<u8> {
     bytes
 }
 
-/// The material's uniform block: the header and `MAX_LOBES` lobes (16 416 bytes; every Vulkan
-/// device reads uniform buffers of 16 384 bytes, lavapipe and desktop GPUs 64 KiB).
+/// The material's uniform block: the header and `MAX_LOBES` lobes, 16 416 bytes — 32 more than the
+/// `maxUniformBufferRange` every Vulkan device guarantees; lavapipe and desktop GPUs have 64 KiB or
+/// more, and `Renderer::new` refuses a device with less.
 pub const MATERIAL_UNIFORM_BYTES: usize =
     std::mem::size_of::<GpuMaterialHeader>() + crate::brdf::material::MAX_LOBES * std::mem::size_of::<GpuLobe>();
 

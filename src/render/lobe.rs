@@ -179,6 +179,24 @@ pub struct LobePass {
 /// What a building thread sends: its variant and pipeline.
 type Built = (Variant, Result<Pipeline>);
 
+/// The end of a building thread, also by a panic: an error is sent in place of the pipeline, then
+/// the owner is notified (so a waiting view learns of the failure instead of waiting forever).
+struct Done {
+    variant: Variant,
+    sender: Sender<Built>,
+    notify: Notify,
+}
+
+impl Drop for Done {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            let panicked = crate::Error::NoDevice("the thread building a lobe pipeline panicked".into());
+            let _ = self.sender.send((self.variant, Err(panicked)));
+        }
+        (self.notify)();
+    }
+}
+
 fn build(raw: &ash::Device, v: &Variant) -> Result<Pipeline> {
     let name = format!("lobe[{}]", v.tag());
     Pipeline::compute_on(raw, crate::spirv!("lobe.comp"), &name, &BINDINGS, 128, &v.constants())
@@ -192,6 +210,13 @@ impl LobePass {
     /// Takes in the pipelines the building threads have sent (the first error, after taking all).
     fn collect(&mut self, ctx: &Context) -> Result<()> {
         let mut failed = None;
+        // Threads that have ended: each sent its pipeline (or, panicking, an error) before it ended.
+        let ended: Vec<Variant> = self.building.iter().filter(|(_, t)| t.is_finished()).map(|(v, _)| *v).collect();
+        for v in ended {
+            if self.building.remove(&v).expect("listed above").join().is_err() && failed.is_none() {
+                failed = Some(crate::Error::NoDevice("the thread building a lobe pipeline panicked".into()));
+            }
+        }
         while let Ok((v, p)) = self.built.1.try_recv() {
             if let Some(thread) = self.building.remove(&v) {
                 // It has sent its one message; what is left of it is returning.
@@ -231,13 +256,6 @@ impl LobePass {
     /// their own (one per variant), each calling `notify` once its pipeline can be collected.
     pub fn ready(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<bool> {
         self.collect(ctx)?;
-        // A thread that has ended sent its pipeline first, unless it panicked.
-        if self.building.values().any(|t| t.is_finished()) {
-            self.collect(ctx)?;
-            if self.building.values().any(|t| t.is_finished()) {
-                return Err(crate::Error::NoDevice("the thread building a lobe pipeline panicked".into()));
-            }
-        }
         let mut ready = true;
         for v in variants {
             if self.pipelines.contains_key(v) {
@@ -251,8 +269,8 @@ impl LobePass {
                 let thread = std::thread::Builder::new()
                     .name("lobe pipeline".into())
                     .spawn(move || {
-                        let _ = sender.send((variant, build(&raw, &variant)));
-                        notify();
+                        let done = Done { variant, sender, notify };
+                        let _ = done.sender.send((variant, build(&raw, &variant)));
                     })
                     .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
                 self.building.insert(*v, thread);

@@ -129,6 +129,14 @@ pub struct Renderer {
 
 impl Renderer {
     pub fn new(ctx: Context) -> Result<Renderer> {
+        let range = ctx.device.limits.max_uniform_buffer_range as usize;
+        if range < gpu::MATERIAL_UNIFORM_BYTES {
+            return Err(Error::NoDevice(format!(
+                "{}: uniform buffers of {range} bytes; the material needs {}",
+                ctx.device.name,
+                gpu::MATERIAL_UNIFORM_BYTES
+            )));
+        }
         let passes = Passes::new(&ctx)?;
         let ring = match FrameRing::new(&ctx) {
             Ok(r) => r,
@@ -258,7 +266,11 @@ impl Renderer {
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
         self.begin_frame(material)?;
-        let recorded = self.record_view(material, settings, Progress::Fresh, false).and_then(|_| {
+        // A headless frame builds its pipelines at once (it has no later frame to wait for).
+        let background = self.build_in_background.take();
+        let recorded = self.record_view(material, settings, Progress::Fresh, false);
+        self.build_in_background = background;
+        let recorded = recorded.and_then(|_| {
             let (w, h) = (settings.width, settings.height);
             if self.readback.as_ref().is_none_or(|b| b.size != w as u64 * h as u64 * 16) {
                 self.idle()?;

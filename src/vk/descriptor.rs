@@ -67,7 +67,8 @@ pub fn allocate(ctx: &Context, pool: vk::DescriptorPool, layout: vk::DescriptorS
 /// What one binding points at.
 pub enum Binding<'a> {
     Storage(&'a Buffer),
-    Uniform(&'a Buffer),
+    /// A uniform buffer's first `range` bytes (at most the device's `maxUniformBufferRange`).
+    Uniform(&'a Buffer, u64),
     StorageImage(vk::ImageView),
     Sampled(vk::ImageView, vk::Sampler),
 }
@@ -77,7 +78,8 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
     let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
         .iter()
         .map(|b| match b {
-            Binding::Storage(buf) | Binding::Uniform(buf) => [buf.descriptor()],
+            Binding::Storage(buf) => [buf.descriptor()],
+            Binding::Uniform(buf, range) => [buf.descriptor().range(*range)],
             _ => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
@@ -101,7 +103,7 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
             let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32);
             let w = w.descriptor_type(b.ty());
             match b {
-                Binding::Storage(_) | Binding::Uniform(_) => w.buffer_info(&buffers[i]),
+                Binding::Storage(_) | Binding::Uniform(..) => w.buffer_info(&buffers[i]),
                 Binding::StorageImage(_) | Binding::Sampled(..) => w.image_info(&images[i]),
             }
         })
@@ -114,7 +116,7 @@ impl Binding<'_> {
     pub fn ty(&self) -> vk::DescriptorType {
         match self {
             Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            Binding::Uniform(..) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
             Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         }
