@@ -190,21 +190,33 @@ struct Done {
 impl Drop for Done {
     fn drop(&mut self) {
         if std::thread::panicking() {
-            let panicked = crate::Error::NoDevice("the thread building a lobe pipeline panicked".into());
-            let _ = self.sender.send((self.variant, Err(panicked)));
+            let _ = self.sender.send((self.variant, Err(panicked())));
         }
         (self.notify)();
     }
 }
 
+/// The debug name of a variant's pipeline.
+fn pipeline_name(v: &Variant) -> String {
+    format!("lobe[{}]", v.tag())
+}
+
 fn build(raw: &ash::Device, v: &Variant) -> Result<Pipeline> {
-    let name = format!("lobe[{}]", v.tag());
-    Pipeline::compute_on(raw, crate::spirv!("lobe.comp"), &name, &BINDINGS, 128, &v.constants())
+    Pipeline::compute_on(raw, crate::spirv!("lobe.comp"), &pipeline_name(v), &BINDINGS, 128, &v.constants())
+}
+
+fn panicked() -> crate::Error {
+    crate::Error::NoDevice("the thread building a lobe pipeline panicked".into())
 }
 
 impl LobePass {
     pub fn new() -> LobePass {
         LobePass { pipelines: HashMap::new(), building: HashMap::new(), built: channel() }
+    }
+
+    fn insert(&mut self, ctx: &Context, v: Variant, p: Pipeline) {
+        p.name(ctx, &pipeline_name(&v));
+        self.pipelines.insert(v, p);
     }
 
     /// Takes in the pipelines the building threads have sent (the first error, after taking all).
@@ -214,7 +226,7 @@ impl LobePass {
         let ended: Vec<Variant> = self.building.iter().filter(|(_, t)| t.is_finished()).map(|(v, _)| *v).collect();
         for v in ended {
             if self.building.remove(&v).expect("listed above").join().is_err() && failed.is_none() {
-                failed = Some(crate::Error::NoDevice("the thread building a lobe pipeline panicked".into()));
+                failed = Some(panicked());
             }
         }
         while let Ok((v, p)) = self.built.1.try_recv() {
@@ -223,10 +235,7 @@ impl LobePass {
                 let _ = thread.join();
             }
             match p {
-                Ok(p) => {
-                    p.name(ctx, &format!("lobe[{}]", v.tag()));
-                    self.pipelines.insert(v, p);
-                }
+                Ok(p) => self.insert(ctx, v, p),
                 Err(e) => failed = failed.or(Some(e)),
             }
         }
@@ -245,8 +254,7 @@ impl LobePass {
         for v in variants {
             if !self.pipelines.contains_key(v) {
                 let p = build(ctx.raw(), v)?;
-                p.name(ctx, &format!("lobe[{}]", v.tag()));
-                self.pipelines.insert(*v, p);
+                self.insert(ctx, *v, p);
             }
         }
         Ok(())
