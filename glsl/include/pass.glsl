@@ -21,7 +21,7 @@ layout(push_constant) uniform Push {
     vec4 forward;  // camera forward (unit)
     uvec4 size;    // image W, H; environment W, H
     uvec4 params;  // lobe index, samples per lobe N, first sample of this dispatch, total samples
-    vec4 fparams;  // diffuse rgb (diffuse pass) | 1/(total samples) (mis)
+    vec4 fparams;  // diffuse rgb (diffuse) | 1/(total samples) (mis) | lod bias, filter mode, light counts (lobe) | 1/σ² (denoise)
     vec4 light;    // canvas light direction, intensity
 } pc;
 

@@ -51,9 +51,16 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     Ok(())
 }
 
-pub fn error_vs_time(quick: bool, out: &Path, hdri: Option<&Path>) -> anyhow::Result<()> {
+pub fn error_vs_time(
+    quick: bool,
+    out: &Path,
+    hdri: Option<&Path>,
+    maps: &[String],
+    materials: &[String],
+) -> anyhow::Result<()> {
     brdf_shop::fsio::check_output_dir("--out", out)?;
     let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
+    plan.restrict(maps, materials)?;
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
     let mut r = renderer()?;

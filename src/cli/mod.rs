@@ -175,6 +175,12 @@ enum Report {
         /// Folder of the environment maps (default: BRDF_SHOP_HDRI, else assets/hdri in the current directory).
         #[arg(long)]
         hdri: Option<PathBuf>,
+        /// Only these of the plan's maps, comma-separated (e.g. `sky.exr,studio.exr`).
+        #[arg(long, value_delimiter = ',')]
+        maps: Vec<String>,
+        /// Only these of the plan's materials, comma-separated (e.g. `sharp-ward,rough-gm`).
+        #[arg(long, value_delimiter = ',')]
+        materials: Vec<String>,
     },
     /// NaN/Inf counts, GPU f32 against CPU f64 and maximum albedo over stiff and extreme inputs.
     Stability {
@@ -284,8 +290,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             })?)
         }
         Some(Command::Bench { quick, json, hdri }) => measure::bench(quick, json.as_deref(), hdri.as_deref()),
-        Some(Command::Report(Report::ErrorVsTime { quick, out, hdri })) => {
-            measure::error_vs_time(quick, &out, hdri.as_deref())
+        Some(Command::Report(Report::ErrorVsTime { quick, out, hdri, maps, materials })) => {
+            measure::error_vs_time(quick, &out, hdri.as_deref(), &maps, &materials)
         }
         Some(Command::Report(Report::Stability { quick, out })) => measure::stability(quick, out.as_deref()),
         Some(Command::Reference(args)) => reference::run(&args),

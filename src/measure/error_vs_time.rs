@@ -60,6 +60,28 @@ impl Plan {
     }
 }
 
+impl Plan {
+    /// Keeps only the named maps and materials (all of a kind when its list is empty); a name the
+    /// plan does not hold is an error naming the option and what the plan holds.
+    pub fn restrict(&mut self, maps: &[String], materials: &[String]) -> Result<()> {
+        fn keep(option: &str, names: &[String], all: &mut Vec<&'static str>) -> Result<()> {
+            if names.is_empty() {
+                return Ok(());
+            }
+            if let Some(bad) = names.iter().find(|n| !all.contains(&n.as_str())) {
+                return Err(Error::input(
+                    option,
+                    format!("{} is not in this sweep (it has {})", crate::fsio::quote(bad), all.join(", ")),
+                ));
+            }
+            all.retain(|a| names.iter().any(|n| n == a));
+            Ok(())
+        }
+        keep("--maps", maps, &mut self.envs)?;
+        keep("--materials", materials, &mut self.materials)
+    }
+}
+
 /// One row of the CSV.
 #[derive(Clone, Debug)]
 pub struct Row {

@@ -19,7 +19,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 10] = [
+const BINDINGS: [vk::DescriptorType; 11] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
@@ -30,6 +30,7 @@ const BINDINGS: [vk::DescriptorType; 10] = [
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_IMAGE,
 ];
 
 /// The specialisation constants of `lobe.comp` for one lobe.
@@ -163,6 +164,17 @@ pub struct Job<'a> {
     /// The frame's light samples, how many, and the sample counts of the bright and dark sets (for a
     /// `points` variant: the lights' points, how many, and zeros).
     pub light_samples: Option<(&'a Buffer, u32, [f32; 2])>,
+    pub into: Into,
+}
+
+/// Where a lobe pass adds its estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Into {
+    /// The accumulation image, with the frame's sample set at every pixel.
+    Accum,
+    /// `Targets::rough`, for the filter (`denoise`), with the set shifted per pixel; `first`: the
+    /// frame's first such pass, which writes instead of adding (nothing clears the image).
+    Rough { first: bool },
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -289,7 +301,7 @@ impl LobePass {
 
     /// Adds one lobe as `job` says into the image.
     pub fn record(&self, rec: &Recording<'_>, variant: Variant, job: &Job<'_>) -> Result<()> {
-        let Job { index, samples, seed, material, halton, light_samples } = *job;
+        let Job { index, samples, seed, material, halton, light_samples, into } = *job;
         let Some(pipeline) = self.pipelines.get(&variant) else {
             return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} was not prepared")));
         };
@@ -315,7 +327,7 @@ impl LobePass {
             &[
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(t.accum.view),
+                Binding::StorageImage(if into == Into::Accum { t.accum.view } else { t.rough.view }),
                 Binding::Sampled(residual.view, env.sampler),
                 Binding::Storage(material),
                 Binding::Storage(halton),
@@ -323,11 +335,19 @@ impl LobePass {
                 Binding::Storage(cones),
                 Binding::Storage(samples_buf),
                 Binding::Storage(&t.pixels),
+                // A filtered pass's light term (read only by those).
+                Binding::StorageImage(t.accum.view),
             ],
         )?;
         let mut push = rec.push;
         push.params = [index, samples, seed, m];
-        push.fparams = [KEY_LOD_BIAS, 0.0, counts[0], counts[1]];
+        let mode = match into {
+            Into::Accum => 0.0,
+            Into::Rough { first: false } => 1.0,
+            Into::Rough { first: true } => 2.0,
+        };
+        let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
+        push.fparams = [bias, mode, counts[0], counts[1]];
         rec.dispatch_listed(pipeline, set, &push);
         Ok(())
     }

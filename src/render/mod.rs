@@ -16,6 +16,7 @@ pub mod background;
 pub mod canvas;
 pub mod compact;
 pub mod compose;
+pub mod denoise;
 pub mod diffuse;
 pub mod environment;
 pub mod eval;
@@ -53,6 +54,7 @@ struct Passes {
     background: background::BackgroundPass,
     compact: compact::CompactPass,
     diffuse: diffuse::DiffusePass,
+    denoise: denoise::DenoisePass,
     lobe: lobe::LobePass,
     mis: mis::MisPass,
     canvas: canvas::CanvasPass,
@@ -68,6 +70,7 @@ impl Passes {
             background: background::BackgroundPass::new(ctx)?,
             compact: compact::CompactPass::new(ctx)?,
             diffuse: diffuse::DiffusePass::new(ctx)?,
+            denoise: denoise::DenoisePass::new(ctx)?,
             lobe: lobe::LobePass::new(),
             mis: mis::MisPass::new(ctx)?,
             canvas: canvas::CanvasPass::new(ctx)?,
@@ -82,6 +85,7 @@ impl Passes {
         self.background.destroy(ctx);
         self.compact.destroy(ctx);
         self.diffuse.destroy(ctx);
+        self.denoise.destroy(ctx);
         self.lobe.destroy(ctx);
         self.mis.destroy(ctx);
         self.canvas.destroy(ctx);
@@ -105,6 +109,9 @@ pub struct Renderer {
     /// lights off their residual map (`keylight::WideLights`); false leaves them in it (a test
     /// compares the two).
     pub wide_lights: bool,
+    /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
+    /// false leaves them unfiltered (a test compares the two).
+    pub denoise: bool,
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
@@ -150,6 +157,7 @@ impl Renderer {
             cull_hidden_faces: true,
             light_reach_test: true,
             wide_lights: true,
+            denoise: true,
             seed: 0,
             build_in_background: None,
             passes: Some(passes),

@@ -8,7 +8,8 @@ use super::environment::GpuEnvironment;
 use super::gpu::{self, Push};
 use super::targets::Targets;
 use super::{
-    compact, compose, key_light_samples, lobe, Estimator, Progress, Recorded, Renderer, Settings, View, MAX_SPP,
+    compact, compose, denoise, key_light_samples, lobe, Estimator, Progress, Recorded, Renderer, Settings, View,
+    MAX_SPP,
 };
 use crate::brdf::Material;
 use crate::error::{Error, Result};
@@ -271,7 +272,27 @@ impl Renderer {
                     ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
                 }
                 let halton = &self.halton.as_ref().expect("made above").1;
+                // The rough lobes the filter takes (`denoise::fits`), and the smallest α among them.
+                let filtered = |i: u32, v: &lobe::Variant| {
+                    self.denoise && v.key && denoise::fits(&material.lobes[i as usize], v.lights && !v.points)
+                };
+                let min_alpha = lobes
+                    .iter()
+                    .filter(|(i, v)| filtered(*i, v))
+                    .map(|(i, _)| material.lobes[*i as usize].alpha_x.min(material.lobes[*i as usize].alpha_y))
+                    .fold(f64::INFINITY, f64::min);
+                let mut first_filtered = true;
+                if min_alpha.is_finite() {
+                    // Zero (unmarked) where no lobe pass writes (`denoise.comp`).
+                    targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                }
                 for &(i, v) in &lobes {
+                    let into = if filtered(i, &v) {
+                        let first = std::mem::replace(&mut first_filtered, false);
+                        lobe::Into::Rough { first }
+                    } else {
+                        lobe::Into::Accum
+                    };
                     let name = format!("lobe{i}[{}]", v.tag());
                     ts.time(ctx, cmd, &name, || {
                         let job = lobe::Job {
@@ -285,9 +306,13 @@ impl Renderer {
                                 (true, false) => light_points,
                                 (false, _) => light_samples,
                             },
+                            into,
                         };
                         passes.lobe.record(&rec, v, &job)
                     })?;
+                }
+                if min_alpha.is_finite() {
+                    ts.time(ctx, cmd, "denoise", || passes.denoise.record(&rec, min_alpha, settings.spp))?;
                 }
             }
         }

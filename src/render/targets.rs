@@ -19,6 +19,10 @@ pub struct Targets {
     pub accum: Image,
     /// The running sum of progressive refinement frames (see `accumulate`).
     pub sum: Image,
+    /// The `key` estimator's filtered lobes before their filter, each shaded pixel marked with its
+    /// normal (`denoise`), and the filter's intermediate image.
+    pub rough: Image,
+    pub mid: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
     /// run over it).
     pub pixels: Buffer,
@@ -63,6 +67,22 @@ impl Targets {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
                 "refinement.sum",
             )?);
+            made.push(Image::new(
+                ctx,
+                (width, height),
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
+                "rough",
+            )?);
+            made.push(Image::new(
+                ctx,
+                (width, height),
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
+                "rough.mid",
+            )?);
             super::compact::list_buffer(ctx, width, height)
         })();
         let pixels = match built {
@@ -75,7 +95,7 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("five images were made");
+        let mut next = || it.next().expect("seven images were made");
         Ok(Targets {
             width,
             height,
@@ -84,6 +104,8 @@ impl Targets {
             depth: next(),
             accum: next(),
             sum: next(),
+            rough: next(),
+            mid: next(),
             pixels,
             gbuffer_of: None,
             drawn: false,
@@ -97,7 +119,7 @@ impl Targets {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        for i in [self.position, self.normal, self.depth, self.accum, self.sum] {
+        for i in [self.position, self.normal, self.depth, self.accum, self.sum, self.rough, self.mid] {
             i.destroy(ctx);
         }
         self.pixels.destroy(ctx);

@@ -1,0 +1,94 @@
+//! The `key` estimator's filter of its rough lobes (issue 10): at a few samples a rough lobe's
+//! estimate is noise-limited (8 points over a lobe tens of degrees wide: 8–11 % off at 8 spp on
+//! every map), while its outgoing radiance is smooth in the normal on the scale of its roughness.
+//! The lobe passes of the lobes that [`fits`] admits write their sample sums into `Targets::rough`
+//! with the sample set shifted per pixel (each pixel's error its own), reading the map at the
+//! sharper [`LOD_BIAS`], and mark each pixel with its normal; their light terms (points, no noise)
+//! go straight into the accumulation image. This pass then adds the normal-weighted mean of `rough`
+//! over a window (`glsl/denoise.comp`, separable: two listed passes of 7 taps): weight
+//! `exp(−(1 − n_p·n_q) / σ²)`, σ = [`sigma`] (a fraction of the smallest α of those lobes, shrinking
+//! beyond 8 samples so that the estimate converges).
+
+use ash::vk;
+
+use super::Recording;
+use crate::brdf::Lobe;
+use crate::vk::descriptor::Binding;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::{barrier, Context};
+use crate::Result;
+
+const BINDINGS: [vk::DescriptorType; 4] = [
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
+];
+
+/// The smallest `min(αx, αy)` of a filtered lobe.
+pub const MIN_ALPHA: f64 = 0.2;
+/// σ over the smallest α of the filtered lobes (σ in radians of the angle between normals, for
+/// small angles: `1 − cos θ ≈ θ² / 2`).
+pub const SIGMA_OVER_ALPHA: f64 = 0.3;
+/// The lod bias of a filtered lobe's samples, in place of [`super::lobe::KEY_LOD_BIAS`]: a sharper
+/// lookup than its share of the lobe, whose noise the filter takes (measured on city, Ward α 0.5,
+/// 8 spp, 64²: bias 0 / −1 / −2 / −3 0.168 / 0.066 / 0.044 / 0.046 filtered; the footprint's blur is a
+/// bias the filter cannot take away).
+pub const LOD_BIAS: f32 = -2.0;
+/// The window's radius in pixels, `R` in `denoise.comp`: (2·3 + 1)² = 49 taps.
+pub const RADIUS: u32 = 3;
+
+/// Whether a `key` lobe pass goes through the filter: a lobe of `min(αx, αy)` ≥ [`MIN_ALPHA`]
+/// without MIS light samples (those are the same at every pixel, so their error is not the
+/// per-pixel noise the filter takes; a lobe this rough sees the lights as points on the maps measured).
+pub fn fits(lobe: &Lobe, mis_lights: bool) -> bool {
+    !mis_lights && lobe.alpha_x.min(lobe.alpha_y) >= MIN_ALPHA
+}
+
+/// The filter's σ for lobes of smallest `min(αx, αy)` `min_alpha` at `spp` samples:
+/// [`SIGMA_OVER_ALPHA`] α up to 8 samples, shrinking as `(8 / spp)^¼` beyond, so that the bias
+/// (∝ σ²) falls as fast as the noise it is there to cut (∝ 1/√spp) and the estimate converges.
+pub fn sigma(min_alpha: f64, spp: u32) -> f64 {
+    SIGMA_OVER_ALPHA * min_alpha * (8.0 / f64::from(spp.max(1))).min(1.0).powf(0.25)
+}
+
+pub struct DenoisePass {
+    pipeline: Pipeline,
+}
+
+impl DenoisePass {
+    pub fn new(ctx: &Context) -> Result<DenoisePass> {
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("denoise.comp"), "denoise", &BINDINGS, 128, &[])?;
+        Ok(DenoisePass { pipeline })
+    }
+
+    /// Adds the filtered `rough` image into the accumulation image (two passes, through `mid`);
+    /// `min_alpha`: the smallest `min(αx, αy)` of the lobes in it.
+    pub fn record(&self, rec: &Recording<'_>, min_alpha: f64, spp: u32) -> Result<()> {
+        let t = rec.targets;
+        let sigma = sigma(min_alpha, spp);
+        let mut push = rec.push;
+        push.fparams = [(1.0 / (sigma * sigma)) as f32, 0.0, 0.0, 0.0];
+        // Written whole by the first pass.
+        // Unmarked where the first pass writes nothing (off the list).
+        t.mid.clear_to_general(rec.ctx, rec.cmd, barrier::COMPUTE_READ_WRITE);
+        for (direction, src) in [(0, &t.rough), (1, &t.mid)] {
+            let set = rec.set(
+                &self.pipeline,
+                &[
+                    Binding::StorageImage(src.view),
+                    Binding::StorageImage(t.mid.view),
+                    Binding::StorageImage(t.accum.view),
+                    Binding::Storage(&t.pixels),
+                ],
+            )?;
+            push.params = [direction, 0, 0, 0];
+            rec.dispatch_listed(&self.pipeline, set, &push);
+        }
+        Ok(())
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+    }
+}
