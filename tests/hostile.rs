@@ -249,6 +249,18 @@ fn outputs_checked_first_and_left_alone() {
     refused(&cpu(&["bench", "--quick", "--json", s(&missing)]), 1, &["--json", "missing"]);
     refused(&cpu(&["report", "stability", "--quick", "--out", s(&folder)]), 1, &["--out", "folder"]);
     refused(&cpu(&["report", "error-vs-time", "--quick", "--out", s(&existing)]), 1, &["--out", "not a folder"]);
+    // A map or material the sweep does not hold: named, with what it holds, before the work.
+    let fresh = d.join("sweep");
+    refused(
+        &cpu(&["report", "error-vs-time", "--quick", "--out", s(&fresh), "--maps", "moon.exr"]),
+        1,
+        &["--maps", "moon.exr", "studio.exr"],
+    );
+    refused(
+        &cpu(&["report", "error-vs-time", "--out", s(&fresh), "--materials", "rough-gm,glass"]),
+        1,
+        &["--materials", "glass", "rough-gm"],
+    );
     refused(&cpu(&["demo", "--out", s(&existing.join("x"))]), 1, &["--out", "not a folder"]);
     refused(&cpu(&["edit", "--out", s(&missing), "--quit"]), 1, &["--out", "missing"]);
     assert_eq!(listing(d), ["a-folder", "env.exr", "f.exr", "old.png"]);

@@ -58,9 +58,9 @@ pub fn error_vs_time(
     maps: &[String],
     materials: &[String],
 ) -> anyhow::Result<()> {
-    brdf_shop::fsio::check_output_dir("--out", out)?;
     let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
     plan.restrict(maps, materials)?;
+    brdf_shop::fsio::check_output_dir("--out", out)?;
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;
     let mut r = renderer()?;
