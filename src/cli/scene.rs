@@ -42,8 +42,8 @@ pub struct SceneArgs {
     /// Image size `WxH`.
     #[arg(long, default_value = "512x512", allow_hyphen_values = true)]
     pub size: String,
-    /// Samples per pixel per lobe component (key, fis, plain; key adds as many light samples) or per
-    /// pixel (mis, reference).
+    /// Samples per pixel per lobe component (key, fis, plain; key adds as many light samples, at most
+    /// 408) or per pixel (mis, reference).
     #[arg(long, allow_hyphen_values = true)]
     pub spp: Option<u32>,
     /// The estimator of the mesh view (default key).

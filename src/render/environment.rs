@@ -7,6 +7,7 @@ use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
+use super::gpu;
 use crate::scene::env::{Environment, MipLevel};
 use crate::scene::keylight::{self, KeyLights};
 use crate::vk::{image, Buffer, Context, Image};
@@ -58,6 +59,11 @@ fn storage(ctx: &Context, data: &[f32], name: &str) -> Result<Buffer> {
     Buffer::upload(ctx, bytemuck::cast_slice(data), vk::BufferUsageFlags::STORAGE_BUFFER, name)
 }
 
+/// Quadrature points as the lobe pass's uniform light set (`gpu::light_set_bytes`).
+fn point_set(ctx: &Context, rows: &[[f32; 8]], name: &str) -> Result<Buffer> {
+    Buffer::upload(ctx, &gpu::light_set_bytes(rows), vk::BufferUsageFlags::UNIFORM_BUFFER, name)
+}
+
 /// The key lights of a map on the GPU (issue 10's estimator): the residual map (lights replaced by
 /// their local background) with its mip chain and SH, and the lights' cones. Absent when the map has
 /// no key light.
@@ -97,7 +103,7 @@ impl GpuWideLights {
     fn new(ctx: &Context, keys: &KeyLights, wide: &keylight::WideLights) -> Result<GpuWideLights> {
         let residual = upload_texture(ctx, &wide.residual, "keylights.wide.residual")?;
         let all: Vec<keylight::KeyLight> = keys.lights.iter().chain(&wide.lights).cloned().collect();
-        match storage(ctx, &keylight::point_table(&all).concat(), "keylights.wide.points") {
+        match point_set(ctx, &keylight::point_table(&all), "keylights.wide.points") {
             Ok(points) => {
                 Ok(GpuWideLights { residual, points, count: 4 * all.len() as u32, lights: wide.lights.clone() })
             }
@@ -296,8 +302,7 @@ impl GpuKeyLights {
                 return Err(crate::Error::input(env.origin.clone(), "the key lights carry no energy"));
             };
             made.push(storage(ctx, &cone_table(&keys.lights), "keylights.cones")?);
-            let points: Vec<f32> = keylight::point_table(&keys.lights).concat();
-            made.push(storage(ctx, &points, "keylights.points")?);
+            made.push(point_set(ctx, &keylight::point_table(&keys.lights), "keylights.points")?);
             Ok(sampling)
         })();
         let texels = built.and_then(|sampling| {

@@ -142,3 +142,16 @@ pub fn mis_sequence(samples: u32) -> Vec<[f32; 4]> {
 pub fn vec4(v: DVec3, w: f32) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w]
 }
+
+/// The bytes of the lobe pass's uniform block of light samples or points (`lobe.comp`
+/// `LightSamples`: 1024 `vec4`, two per sample): Vulkan's guaranteed `maxUniformBufferRange`.
+pub const LIGHT_SET_UNIFORM_BYTES: usize = 16384;
+/// The most light samples or points the block holds.
+pub const LIGHT_SET_MAX: usize = LIGHT_SET_UNIFORM_BYTES / 32;
+
+/// `rows` (two `vec4` each) padded with zeros to the light set's uniform block.
+pub fn light_set_bytes(rows: &[[f32; 8]]) -> Vec<u8> {
+    let mut bytes = bytemuck::cast_slice::<[f32; 8], u8>(rows).to_vec();
+    bytes.resize(bytes.len().max(LIGHT_SET_UNIFORM_BYTES), 0);
+    bytes
+}

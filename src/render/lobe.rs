@@ -28,7 +28,7 @@ const BINDINGS: [vk::DescriptorType; 11] = [
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
     vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::UNIFORM_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_IMAGE,
 ];
@@ -313,7 +313,8 @@ impl LobePass {
         }
         // Stand-ins where the variant reads no key lights (the layout is the same for every variant).
         let (cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
-        let (samples_buf, m, counts) = light_samples.filter(|_| variant.lights).unwrap_or((&env.pdf, 0, [0.0; 2]));
+        // The material's uniform buffer stands in (it is longer than the light set's block).
+        let (samples_buf, m, counts) = light_samples.filter(|_| variant.lights).unwrap_or((material, 0, [0.0; 2]));
         let residual = match (variant.key, keys.and_then(|k| k.wide.as_ref()).filter(|_| variant.wide)) {
             (true, Some(w)) => &w.residual,
             (true, None) if variant.wide => {
@@ -333,7 +334,7 @@ impl LobePass {
                 Binding::Storage(halton),
                 Binding::Sampled(texels.view, env.sampler),
                 Binding::Storage(cones),
-                Binding::Storage(samples_buf),
+                Binding::Uniform(samples_buf, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
                 Binding::Storage(&t.pixels),
                 // A filtered pass's light term (read only by those).
                 Binding::StorageImage(t.accum.view),

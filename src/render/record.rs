@@ -213,7 +213,7 @@ impl Renderer {
         if let (true, true, Some(keys)) = (mesh_view, sampled, self.env.as_ref().and_then(|e| e.keys.as_ref())) {
             let m = key_light_samples(settings.spp);
             let samples = keys.frame_samples(m, self.seed);
-            ring.current().upload(ctx, "keylights.frame", bytemuck::cast_slice(&samples))?;
+            ring.current().upload(ctx, "keylights.frame", &gpu::light_set_bytes(&samples))?;
             light_counts = Some((samples.len() as u32, [m as f32, keys.sampling.dark_samples(m) as f32]));
         }
         let frame = ring.current();
