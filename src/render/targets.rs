@@ -51,38 +51,16 @@ impl Targets {
                 vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
                 "gbuffer.depth",
             )?);
-            made.push(Image::new(
-                ctx,
-                (width, height),
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST,
-                "accum",
-            )?);
-            made.push(Image::new(
-                ctx,
-                (width, height),
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-                "refinement.sum",
-            )?);
-            made.push(Image::new(
-                ctx,
-                (width, height),
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
-                "rough",
-            )?);
-            made.push(Image::new(
-                ctx,
-                (width, height),
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
-                "rough.mid",
-            )?);
+            // The shading images: RGBA32F storage images with `usage` besides.
+            let rgba = |usage: vk::ImageUsageFlags, name: &str| {
+                let usage = vk::ImageUsageFlags::STORAGE | usage;
+                Image::new(ctx, (width, height), vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
+            };
+            let (src, dst) = (vk::ImageUsageFlags::TRANSFER_SRC, vk::ImageUsageFlags::TRANSFER_DST);
+            made.push(rgba(src | dst, "accum")?);
+            made.push(rgba(src, "refinement.sum")?);
+            made.push(rgba(dst, "rough")?);
+            made.push(rgba(dst, "rough.mid")?);
             super::compact::list_buffer(ctx, width, height)
         })();
         let pixels = match built {
