@@ -31,7 +31,7 @@
 // do not look for the lights.
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
-// FILTERED (fparams.y 1: add, 2: write; a rough lobe, render/denoise.rs): the set is shifted per
+// FILTERED (fparams.y 1; a rough lobe, render/denoise.rs): the set is shifted per
 // pixel instead, so each pixel's quadrature error is its own; the samples' sum goes into `rough`
 // (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
 // over neighbours of like normal, and the light term (points: no noise to filter) into the
@@ -413,7 +413,7 @@ void main() {
     if (!shaded(imageLoad(gpos, p), imageLoad(gnrm, p).xyz, f, wo)) return;
     // Frame 0 takes the set as it is; frame `seed` > 0 shifts it by a hash of the seed (the
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
-    // A lobe pass into the filter (fparams.y 1: add, 2: write) shifts the set per pixel instead, so
+    // A lobe pass into the filter (fparams.y 1) shifts the set per pixel instead, so
     // that each pixel's quadrature error is its own (render/denoise.rs).
     bool filtered = pc.fparams.y > 0.5;
     uint seed = hash_u32(pc.params.z);
@@ -435,7 +435,7 @@ void main() {
     bool lit = LIGHTS && (!REACH_TEST || sees_lights(f, l.shape, b));
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);
-    vec4 acc = pc.fparams.y > 1.5 ? vec4(0.0) : imageLoad(accum, p);
+    vec4 acc = imageLoad(accum, p);
     if (filtered) {
         // Only the samples' noisy sum goes through the filter; the light term (the lights' points:
         // no noise, and filtering it would only blur it) is added as it is.

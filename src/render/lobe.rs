@@ -172,9 +172,9 @@ pub struct Job<'a> {
 pub enum Into {
     /// The accumulation image, with the frame's sample set at every pixel.
     Accum,
-    /// `Targets::rough`, for the filter (`denoise`), with the set shifted per pixel; `first`: the
-    /// frame's first such pass, which writes instead of adding (nothing clears the image).
-    Rough { first: bool },
+    /// `Targets::rough` (cleared to unmarked zeros before the frame's first such pass), for the
+    /// filter (`denoise`), with the set shifted per pixel.
+    Rough,
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -342,11 +342,7 @@ impl LobePass {
         )?;
         let mut push = rec.push;
         push.params = [index, samples, seed, m];
-        let mode = match into {
-            Into::Accum => 0.0,
-            Into::Rough { first: false } => 1.0,
-            Into::Rough { first: true } => 2.0,
-        };
+        let mode = if into == Into::Accum { 0.0 } else { 1.0 };
         let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
         push.fparams = [bias, mode, counts[0], counts[1]];
         rec.dispatch_listed(pipeline, set, &push);

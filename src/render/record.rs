@@ -273,26 +273,24 @@ impl Renderer {
                 }
                 let halton = &self.halton.as_ref().expect("made above").1;
                 // The rough lobes the filter takes (`denoise::fits`), and the smallest α among them.
-                let filtered = |i: u32, v: &lobe::Variant| {
-                    self.denoise && v.key && denoise::fits(&material.lobes[i as usize], v.lights && !v.points)
-                };
+                let filtered: Vec<bool> = lobes
+                    .iter()
+                    .map(|(i, v)| {
+                        self.denoise && v.key && denoise::fits(&material.lobes[*i as usize], v.lights && !v.points)
+                    })
+                    .collect();
                 let min_alpha = lobes
                     .iter()
-                    .filter(|(i, v)| filtered(*i, v))
-                    .map(|(i, _)| material.lobes[*i as usize].alpha_x.min(material.lobes[*i as usize].alpha_y))
+                    .zip(&filtered)
+                    .filter(|(_, &f)| f)
+                    .map(|((i, _), _)| material.lobes[*i as usize].alpha_x.min(material.lobes[*i as usize].alpha_y))
                     .fold(f64::INFINITY, f64::min);
-                let mut first_filtered = true;
                 if min_alpha.is_finite() {
-                    // Zero (unmarked) where no lobe pass writes (`denoise.comp`).
+                    // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.
                     targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
                 }
-                for &(i, v) in &lobes {
-                    let into = if filtered(i, &v) {
-                        let first = std::mem::replace(&mut first_filtered, false);
-                        lobe::Into::Rough { first }
-                    } else {
-                        lobe::Into::Accum
-                    };
+                for (&(i, v), &f) in lobes.iter().zip(&filtered) {
+                    let into = if f { lobe::Into::Rough } else { lobe::Into::Accum };
                     let name = format!("lobe{i}[{}]", v.tag());
                     ts.time(ctx, cmd, &name, || {
                         let job = lobe::Job {
