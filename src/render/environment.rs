@@ -13,9 +13,22 @@ use crate::scene::keylight::{self, KeyLights};
 use crate::vk::{image, Buffer, Context, Image};
 use crate::Result;
 
+/// How the `key` estimator's lobe passes read the residual's mip chain: bilinear within the nearest
+/// level, not between two. Their lod is already the sample's own footprint (`lobe::KEY_LOD_BIAS`),
+/// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost. Measured (session 13,
+/// lavapipe): `assets/bench-4lobes.brdf.json`'s `key` lobe passes 237 → 206 ms at 512² (median of
+/// 9 interleaved runs); on the 64² sweep the error at 8 spp rose by 0–9 % of itself (city
+/// anisotropic 0.070 → 0.076, the filtered rough lobes unchanged), at 1 spp by up to 40 % on the
+/// sharp lobes. Point sampling as well (nearest texel) cut the passes to 181 ms but raised the
+/// 8-spp error by up to 60 % (city sharp 0.015 → 0.024): not kept.
+pub const KEY_MIPMAP: vk::SamplerMipmapMode = vk::SamplerMipmapMode::NEAREST;
+
 pub struct GpuEnvironment {
     pub texture: Image,
     pub sampler: vk::Sampler,
+    /// The `key` estimator's lobe passes' sampler: bilinear within the nearest mip level
+    /// ([`KEY_MIPMAP`]).
+    pub key_sampler: vk::Sampler,
     /// `Â_l · L_lm`, 9 × `vec4`.
     pub sh: Buffer,
     pub marginal: Buffer,
@@ -365,15 +378,23 @@ impl GpuEnvironment {
         let linear = image::supports(ctx, FORMAT, vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
         let texture = upload_texture(ctx, env, "env.texture")?;
         let mut made: Vec<Buffer> = Vec::new();
-        let built = (|| -> Result<vk::Sampler> {
+        let built = (|| -> Result<(vk::Sampler, vk::Sampler)> {
             made.push(sh_buffer(ctx, env, "env.sh")?);
             let (marginal, conditional, pdf) = sampling_tables(env);
             made.push(storage(ctx, &marginal, "env.marginal")?);
             made.push(storage(ctx, &conditional, "env.conditional")?);
             made.push(storage(ctx, &pdf, "env.pdf")?);
-            image::equirect_sampler(ctx, linear)
+            let sampler = image::equirect_sampler(ctx, linear, vk::SamplerMipmapMode::LINEAR, "env.sampler")?;
+            match image::equirect_sampler(ctx, linear, KEY_MIPMAP, "env.key_sampler") {
+                Ok(key) => Ok((sampler, key)),
+                Err(e) => {
+                    // SAFETY: never used.
+                    unsafe { ctx.raw().destroy_sampler(sampler, None) };
+                    Err(e)
+                }
+            }
         })();
-        let (sampler, made) = match or_destroy(ctx, built, made) {
+        let ((sampler, key_sampler), made) = match or_destroy(ctx, built, made) {
             Ok(r) => r,
             Err(e) => {
                 texture.destroy(ctx);
@@ -388,6 +409,7 @@ impl GpuEnvironment {
         let mut out = GpuEnvironment {
             texture,
             sampler,
+            key_sampler,
             sh,
             marginal,
             conditional,
@@ -428,7 +450,10 @@ impl GpuEnvironment {
 
     pub fn destroy(self, ctx: &Context) {
         // SAFETY: no pending work uses the sampler.
-        unsafe { ctx.raw().destroy_sampler(self.sampler, None) };
+        unsafe {
+            ctx.raw().destroy_sampler(self.sampler, None);
+            ctx.raw().destroy_sampler(self.key_sampler, None);
+        }
         self.texture.destroy(ctx);
         for b in [self.sh, self.marginal, self.conditional, self.pdf] {
             b.destroy(ctx);

@@ -329,7 +329,8 @@ impl LobePass {
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(if into == Into::Accum { t.accum.view } else { t.rough.view }),
-                Binding::Sampled(residual.view, env.sampler),
+                // `key` reads its residual within the nearest mip level (`environment::KEY_MIPMAP`).
+                Binding::Sampled(residual.view, if variant.key { env.key_sampler } else { env.sampler }),
                 Binding::Storage(material),
                 Binding::Storage(halton),
                 Binding::Sampled(texels.view, env.sampler),

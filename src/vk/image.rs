@@ -215,13 +215,14 @@ pub fn supports(ctx: &Context, format: vk::Format, features: vk::FormatFeatureFl
     props.optimal_tiling_features.contains(features)
 }
 
-/// The equirect sampler: linear filtering and mips, `u` repeating (the seam), `v` clamped.
-pub fn equirect_sampler(ctx: &Context, linear: bool) -> Result<vk::Sampler> {
+/// An equirect sampler: linear filtering (where `linear`) and mips (between two levels with
+/// `mipmap` LINEAR, from the nearest level with NEAREST), `u` repeating (the seam), `v` clamped.
+pub fn equirect_sampler(ctx: &Context, linear: bool, mipmap: vk::SamplerMipmapMode, name: &str) -> Result<vk::Sampler> {
     let filter = if linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
     let info = vk::SamplerCreateInfo::default()
         .mag_filter(filter)
         .min_filter(filter)
-        .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+        .mipmap_mode(mipmap)
         .address_mode_u(vk::SamplerAddressMode::REPEAT)
         .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
         .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
@@ -229,6 +230,6 @@ pub fn equirect_sampler(ctx: &Context, linear: bool) -> Result<vk::Sampler> {
         .max_lod(vk::LOD_CLAMP_NONE);
     // SAFETY: the device is live; the sampler is destroyed by its owner.
     let s = unsafe { ctx.raw().create_sampler(&info, None) }.map_err(vk_err("vkCreateSampler"))?;
-    ctx.device.set_name(s, "env.sampler");
+    ctx.device.set_name(s, name);
     Ok(s)
 }
