@@ -5,10 +5,10 @@
 //! material's. No window or GPU here: `on_done` (the editor passes a redraw request) is how the
 //! window learns a report is ready.
 //!
-//! The worker and its thread pool run at the lowest CPU priority ([`yield_to_rendering`]): on
+//! The worker and its thread pool run in the idle scheduling class ([`yield_to_rendering`]): on
 //! lavapipe the GPU is these same CPU cores, and a report measured beside a frame took half of
 //! them (session 13: the interaction frames' passes ran 1.9× slower while a report was measured;
-//! frame medians 432–452 → 221–244 ms at 1280×720). At the lowest priority the report waits for
+//! frame medians 432–452 → 221–244 ms at 1280×720). Idle, the report waits for
 //! the frames: while strokes keep both cores busy it is marked as updating, and it finishes in the
 //! first idle moment. On a machine whose GPU is not its CPU nothing changes.
 
@@ -100,17 +100,21 @@ impl Drop for ReportWorker {
     }
 }
 
-/// Lowers the calling thread's CPU priority to the lowest (nice 19; Linux keeps a nice value per
-/// thread). Where that fails the thread keeps its priority: the report is then only slower to
-/// leave room, never wrong.
+/// Moves the calling thread to the idle scheduling class (`SCHED_IDLE`: it runs only when no other
+/// thread wants the core, and gives way at once when one does); where that is refused, to the
+/// lowest nice value. Where both fail the thread keeps its priority: the report is then only slower
+/// to leave room, never wrong.
 fn yield_to_rendering() {
     #[cfg(target_os = "linux")]
     {
-        // SAFETY: gettid and setpriority take and return plain integers; setpriority on the calling
-        // thread's own id only lowers its own priority.
+        let param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: sched_setscheduler, gettid and setpriority take plain integers and a pointer to a
+        // live `sched_param`; pid 0 and the calling thread's own id change only this thread.
         unsafe {
-            let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
-            libc::setpriority(libc::PRIO_PROCESS, tid, 19);
+            if libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) != 0 {
+                let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+                libc::setpriority(libc::PRIO_PROCESS, tid, 19);
+            }
         }
     }
 }
