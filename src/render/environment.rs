@@ -18,9 +18,9 @@ use crate::Result;
 /// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost. Measured (session 13,
 /// lavapipe): `assets/bench-4lobes.brdf.json`'s `key` lobe passes 237 → 206 ms at 512² (median of
 /// 9 interleaved runs); on the 64² sweep the error at 8 spp rose by 0–9 % of itself (city
-/// anisotropic 0.070 → 0.076, the filtered rough lobes unchanged), at 1 spp by up to 40 % on the
+/// anisotropic 0.070 → 0.076, the filtered rough lobes unchanged), at 1 spp by up to 50 % on the
 /// sharp lobes. Point sampling as well (nearest texel) cut the passes to 181 ms but raised the
-/// 8-spp error by up to 60 % (city sharp 0.015 → 0.024): not kept.
+/// 8-spp error by up to 70 % (city split Ward 0.029 → 0.049): not kept.
 pub const KEY_MIPMAP: vk::SamplerMipmapMode = vk::SamplerMipmapMode::NEAREST;
 
 pub struct GpuEnvironment {
