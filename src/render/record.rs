@@ -283,7 +283,10 @@ impl Renderer {
                     .iter()
                     .zip(&filtered)
                     .filter(|(_, &f)| f)
-                    .map(|((i, _), _)| material.lobes[*i as usize].alpha_x.min(material.lobes[*i as usize].alpha_y))
+                    .map(|((i, _), _)| {
+                        let l = &material.lobes[*i as usize];
+                        l.alpha_x.min(l.alpha_y)
+                    })
                     .fold(f64::INFINITY, f64::min);
                 if min_alpha.is_finite() {
                     // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.

@@ -66,6 +66,9 @@ pub fn key_light_samples(spp: u32) -> u32 {
 /// The most bright light samples a frame takes: 408 and the dark set's 102 fill the lobe pass's
 /// uniform block of 512 (`gpu::LIGHT_SET_MAX`).
 pub const MAX_LIGHT_SAMPLES: u32 = 408;
+// The bright set and the dark one (a quarter of it, `keylight::LightSampling::dark_samples`) fit the block;
+// past it the binding's range would cut samples off without a word.
+const _: () = assert!((MAX_LIGHT_SAMPLES + MAX_LIGHT_SAMPLES / 4) as usize <= super::gpu::LIGHT_SET_MAX);
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum View {
