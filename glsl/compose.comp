@@ -2,6 +2,7 @@
 // The editor's window: the mesh view and the canvas placed side by side, each scaled by its exposure
 // and encoded as sRGB (the same curve as `imageio::srgb8`), the snap marker on the canvas, and the
 // window's grey everywhere else. The tool panel and the BRDF graph are drawn over it by egui.
+// A view rendered smaller than its place (the editor's preview frames) is magnified bilinearly.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba8) writeonly uniform image2D window;
 layout(set = 0, binding = 1, rgba32f) readonly uniform image2D mesh;
@@ -12,6 +13,7 @@ layout(push_constant) uniform Push {
     vec4 scale;         // mesh view scale (exposure / frames), canvas exposure, marker x, y (pixels)
     vec4 background;    // window grey, 0..1 per channel
     uvec4 region;       // the rectangle this dispatch writes: x, y, width, height
+    uvec4 sources;      // the mesh view's image width, height; the canvas image's side; 0
 } pc;
 
 // What this pipeline writes (the others' pixels are left as they are; an `if` runs both sides on
@@ -27,6 +29,40 @@ vec3 srgb(vec3 v) {
     return mix(1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, 12.92 * x, lessThanEqual(x, vec3(0.0031308)));
 }
 
+// Where pixel q of a place of `place` pixels falls in an image of `source` pixels, for bilinear
+// filtering: the four texels' corner (clamped with the other three inside) and the weights.
+void magnify(ivec2 q, ivec2 place, ivec2 source, out ivec2 a, out ivec2 b, out vec2 t) {
+    vec2 s = (vec2(q) + 0.5) * vec2(source) / vec2(place) - 0.5;
+    vec2 f = floor(s);
+    t = s - f;
+    a = clamp(ivec2(f), ivec2(0), source - 1);
+    b = clamp(ivec2(f) + 1, ivec2(0), source - 1);
+}
+
+// The mesh view's radiance at pixel q of its place (`place` pixels).
+vec3 mesh_at(ivec2 q, ivec2 place) {
+    ivec2 source = ivec2(pc.sources.xy);
+    if (source == place) return imageLoad(mesh, q).rgb;
+    ivec2 a, b;
+    vec2 t;
+    magnify(q, place, source, a, b, t);
+    vec3 top = mix(imageLoad(mesh, a).rgb, imageLoad(mesh, ivec2(b.x, a.y)).rgb, t.x);
+    vec3 bottom = mix(imageLoad(mesh, ivec2(a.x, b.y)).rgb, imageLoad(mesh, b).rgb, t.x);
+    return mix(top, bottom, t.y);
+}
+
+// The same for the canvas.
+vec3 canvas_at(ivec2 q, ivec2 place) {
+    ivec2 source = ivec2(pc.sources.zz);
+    if (source == place) return imageLoad(canvas, q).rgb;
+    ivec2 a, b;
+    vec2 t;
+    magnify(q, place, source, a, b, t);
+    vec3 top = mix(imageLoad(canvas, a).rgb, imageLoad(canvas, ivec2(b.x, a.y)).rgb, t.x);
+    vec3 bottom = mix(imageLoad(canvas, ivec2(a.x, b.y)).rgb, imageLoad(canvas, b).rgb, t.x);
+    return mix(top, bottom, t.y);
+}
+
 void main() {
     ivec2 p = ivec2(pc.region.xy + gl_GlobalInvocationID.xy);
     if (gl_GlobalInvocationID.x >= pc.region.z || gl_GlobalInvocationID.y >= pc.region.w) return;
@@ -36,9 +72,9 @@ void main() {
     bool in_mesh = p.x >= mx && p.x < mx + mw && p.y < int(pc.window_size.z);
     bool in_canvas = !in_mesh && p.x >= cx && p.x < cx + cs && p.y < cs;
     if (MESH && in_mesh) {
-        c = srgb(imageLoad(mesh, ivec2(p.x - mx, p.y)).rgb * pc.scale.x);
+        c = srgb(mesh_at(ivec2(p.x - mx, p.y), ivec2(mw, pc.window_size.z)) * pc.scale.x);
     } else if (CANVAS && in_canvas) {
-        c = srgb(imageLoad(canvas, ivec2(p.x - cx, p.y)).rgb * pc.scale.y);
+        c = srgb(canvas_at(ivec2(p.x - cx, p.y), ivec2(cs)) * pc.scale.y);
         ivec2 m = ivec2(pc.scale.zw);
         ivec2 d = abs(p - m);
         if (pc.window_size.w == 1u && ((d.y == 0 && d.x <= 6) || (d.x == 0 && d.y <= 6))) {

@@ -469,7 +469,9 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
         .arg(d("m.brdf.json"))
         .arg("--frame-stats")
         .arg(d("stats.json"))
-        .args(["--quit", "--size", "960x540"])
+        // A budget no device meets: every interaction frame after the first is previewed at the
+        // smallest step, and the screenshot is of the frame that settles the views at full size.
+        .args(["--quit", "--size", "960x540", "--frame-budget", "1"])
         .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
         .output()
         .expect("xvfb-run (tools/setup installs xvfb)");
@@ -540,6 +542,69 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
     }
     assert!(compared[0] == (mw * mh) as usize && compared[1] > (side * side) as usize * 9 / 10, "{compared:?}");
     assert!(worst[0] <= 1 && worst[1] <= 1, "largest difference (mesh view, canvas): {worst:?} levels");
+}
+
+/// While the user paints, the views that change are rendered smaller to fit `--frame-budget` (the
+/// steps of `editor::preview::LEVELS`) and magnified; the first frame without a change renders them
+/// at full size (a settle frame), so a session's last frame is never a preview. `--frame-budget 0`
+/// renders every frame at full size.
+#[test]
+fn interaction_frames_are_previewed_to_fit_the_budget_and_settle_at_full_size() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let session = |budget: &str| {
+        let stats = dir.path().join(format!("stats-{budget}.json"));
+        let run = Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 1280x720x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--replay"])
+            .arg(root.join("assets/default.strokes.json"))
+            .arg("--frame-stats")
+            .arg(&stats)
+            .args(["--quit", "--size", "640x360", "--frame-budget", budget])
+            .env("BRDF_SHOP_RECOVERY", dir.path().join("recovery.brdf.json"))
+            .output()
+            .expect("xvfb-run (tools/setup installs xvfb)");
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success() && !stderr.contains("panicked"), "{stderr}");
+        let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        doc
+    };
+    let names = |f: &serde_json::Value| -> Vec<String> {
+        f["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect()
+    };
+    // 1 ms: no device draws these frames so fast, so every frame after the first one timed is
+    // previewed at the smallest step, 0.25.
+    let doc = session("1");
+    let frames = doc["frames"].as_array().unwrap();
+    let scale = |f: &serde_json::Value| f["scale"].as_f64().unwrap();
+    let interaction: Vec<_> = frames.iter().filter(|f| f["kind"] == "interaction").collect();
+    assert!(interaction.len() >= 4, "{doc}");
+    assert_eq!(scale(interaction[0]), 1.0, "the first frame has nothing to predict from: {doc}");
+    // Frames are timed when their slot of the ring comes round again (two frames in flight), so the
+    // second may still be at full size; from the third on, all are previews.
+    for f in &interaction[2..] {
+        assert_eq!(scale(f), 0.25, "{f}");
+    }
+    let last = frames.last().unwrap();
+    assert_eq!((last["kind"].as_str(), scale(last)), (Some("settle"), 1.0), "{doc}");
+    let passes = names(last);
+    assert!(passes.iter().any(|p| p.starts_with("lobe")) && passes.iter().any(|p| p == "canvas"), "{last}");
+    assert_eq!(doc["settle"]["frames"], 1, "{doc}");
+    // The previews' lobe passes cost less than the settle frame's (a sixteenth of the pixels: 1.5–3.9
+    // ms a frame against 22.8 at 640×360 on lavapipe, release build, measured).
+    let lobe_ms = |f: &serde_json::Value| {
+        let p = f["passes"].as_array().unwrap();
+        p.iter()
+            .filter(|p| p["name"].as_str().unwrap().starts_with("lobe"))
+            .map(|p| p["ms"].as_f64().unwrap())
+            .sum::<f64>()
+    };
+    let last_preview = interaction.iter().rev().find(|f| lobe_ms(f) > 0.0).expect("a previewed frame with lobes");
+    assert!(lobe_ms(last_preview) < lobe_ms(last), "{last_preview} against {last}");
+    // 0: every frame at full size, nothing to settle.
+    let doc = session("0");
+    let frames = doc["frames"].as_array().unwrap();
+    assert!(frames.iter().all(|f| scale(f) == 1.0 && f["kind"] != "settle"), "{doc}");
+    assert_eq!(doc["settle"]["frames"], 0, "{doc}");
 }
 
 /// The start of a command line that runs the rest under Xvfb with a window manager (openbox,

@@ -295,6 +295,10 @@ fn numbers_non_finite_flags_refused() {
         refused(&r, 1, &["--light"]);
     }
     assert!(!out.exists());
+    // The editor's frame budget: milliseconds, 0 or more (refused before any window opens).
+    for bad in ["NaN", "inf", "-1", "1e999", "-0.5", "fast"] {
+        refused(&cpu(&["edit", "--frame-budget", bad, "--quit"]), 1, &["--frame-budget"]);
+    }
 }
 
 #[test]

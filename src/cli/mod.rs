@@ -133,6 +133,11 @@ enum Command {
         /// Window size `WxH` (each side at most 8192).
         #[arg(long, default_value = "1280x720", allow_hyphen_values = true)]
         size: String,
+        /// Milliseconds an interaction frame may take: while you paint or orbit, the views are
+        /// rendered smaller to fit it and magnified, then at full size once you stop (default 50;
+        /// 0: always full size).
+        #[arg(long, value_name = "MS", allow_hyphen_values = true)]
+        frame_budget: Option<f64>,
     },
     /// Headless GPU render of the material on a mesh under an environment, or of the canvas.
     Render(scene::SceneArgs),
@@ -260,8 +265,12 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             resize,
             minimise,
             size,
+            frame_budget,
         }) => {
             let size = scene::parse_size(&size)?;
+            if let Some(ms) = frame_budget {
+                brdf_shop::editor::check_frame_budget(ms)?;
+            }
             let resize = resize
                 .iter()
                 .map(|s| {
@@ -287,6 +296,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 resize,
                 minimise,
                 size,
+                frame_budget_ms: frame_budget,
             })?)
         }
         Some(Command::Bench { quick, json, hdri }) => measure::bench(quick, json.as_deref(), hdri.as_deref()),

@@ -1,8 +1,10 @@
 //! One editor frame: what must be re-rendered (the mesh view restarts on any change of what it
-//! shows, refines while nothing changes, or stays; the canvas only when the material or its light
-//! changed), the tool panel, and the GPU frame that composes and presents it.
+//! shows, previewed smaller when the frame budget asks, settles at full size and then refines while
+//! nothing changes, or stays; the canvas only when the material or its light changed, or to
+//! settle), the tool panel, and the GPU frame that composes and presents it.
 
 use super::lighting::light_from;
+use super::preview::Preview;
 use super::state::Input;
 use super::stats::FrameKind;
 use super::view::{Plan, Shown};
@@ -21,6 +23,15 @@ pub(super) struct MeshKey {
     spp: u32,
 }
 
+/// What a presented frame drew, for its statistics and the preview's model.
+pub(super) struct Drawn {
+    pub kind: FrameKind,
+    /// The linear scale of the views it changed (1: full size).
+    pub scale: f64,
+    /// It rendered the mesh view's `key` image (an interaction or a settle frame).
+    pub sample: bool,
+}
+
 /// What the canvas was last rendered for.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct CanvasKey {
@@ -32,8 +43,10 @@ pub(super) struct CanvasKey {
 impl App {
     /// What this frame renders: the mesh view restarts (any change of what it shows), refines
     /// (nothing changed, refinement on and not done) or stays; the canvas re-renders only when the
-    /// material or its light changed. Returns the frame's kind, `None` when nothing was presented.
-    pub(super) fn draw_frame(&mut self) -> Result<Option<FrameKind>> {
+    /// material or its light changed. Views that change are previewed smaller when the frame budget
+    /// asks (`preview`) and settled at full size in the first frame without a change.
+    /// Returns what the frame drew, `None` when nothing was presented.
+    pub(super) fn draw_frame(&mut self) -> Result<Option<Drawn>> {
         let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(None) };
         let Some((w, h)) = gpu.swapchain_extent()? else { return Ok(None) }; // minimised
         if (state.layout.width, state.layout.height) != (w, h) {
@@ -72,20 +85,31 @@ impl App {
         };
         let refining = !self.opts.quit || self.opts.converge;
         let refined = gpu.renderer.refined_samples();
-        let (mesh, kind) = if self.mesh_key.as_ref() != Some(&mesh_key) || (!refining && refined > 0) {
-            (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Interaction)
+        let mesh_changed = self.mesh_key.as_ref() != Some(&mesh_key) || (!refining && refined > 0);
+        let canvas_changed = self.canvas_key.as_ref() != Some(&canvas_key);
+        // A view that changes is previewed at the budget's scale (`preview`); the first frame in
+        // which nothing changes renders the previewed views at full size (a settle frame).
+        let scale = if mesh_changed || canvas_changed { self.preview.scale() } else { 1.0 };
+        let mesh_size = Preview::size((l.mesh_w, l.height), scale);
+        let canvas_side = Preview::size((l.canvas, l.canvas), scale).0;
+        let (mesh, kind) = if mesh_changed {
+            let preview = crate::render::Settings { width: mesh_size.0, height: mesh_size.1, ..mesh_settings.clone() };
+            (Some((preview, Progress::Fresh)), FrameKind::Interaction)
+        } else if self.mesh_previewed {
+            (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Settle)
         } else if refining && refined < REFINE_MAX {
             let mis = crate::render::Settings { estimator: Estimator::Mis, spp: REFINE_STEP, ..mesh_settings.clone() };
             (Some((mis, Progress::Refine)), FrameKind::Refinement)
         } else {
             (None, FrameKind::Unchanged)
         };
-        let canvas = (self.canvas_key.as_ref() != Some(&canvas_key)).then(|| crate::render::Settings {
-            width: l.canvas,
-            height: l.canvas,
-            view: View::Canvas,
-            ..mesh_settings.clone()
+        let canvas = (canvas_changed || self.canvas_previewed).then(|| {
+            let side = if canvas_changed { canvas_side } else { l.canvas };
+            crate::render::Settings { width: side, height: side, view: View::Canvas, ..mesh_settings.clone() }
         });
+        let kind = if kind == FrameKind::Unchanged && canvas.is_some() { FrameKind::Settle } else { kind };
+        let mesh_previewed = mesh_changed && mesh_size != (l.mesh_w, l.height);
+        let canvas_previewed = canvas_changed && canvas_side != l.canvas;
         let m = state.material().clone();
         if self.curves.as_ref().is_none_or(|c| c.0 != canvas_key) {
             self.curves = Some((canvas_key.clone(), graph::Curves::new(&m, light)));
@@ -112,13 +136,15 @@ impl App {
         let report = worker.latest(&m);
         let shown_refined = if kind == FrameKind::Refinement {
             refined + REFINE_STEP
-        } else if kind == FrameKind::Interaction {
+        } else if matches!(kind, FrameKind::Interaction | FrameKind::Settle) {
             0
         } else {
             refined
         };
         let quality = if self.mesh_waiting && kind == FrameKind::Interaction {
             "mesh view: building the new lobe's shader…".to_string()
+        } else if mesh_previewed {
+            format!("mesh view: key {} spp, preview at {:.0} %", self.spp, scale * 100.0)
         } else if shown_refined == 0 {
             format!("mesh view: key {} spp", self.spp)
         } else {
@@ -171,6 +197,8 @@ impl App {
             ui: (&output.textures_delta, &primitives, output.pixels_per_point),
             capture,
         };
+        let mesh_planned = plan.mesh.is_some();
+        let canvas_planned = plan.canvas.is_some();
         let shown = gpu.frame(&plan)?;
         let presented = match shown {
             Shown::Presented { pixels, mesh_waiting } => {
@@ -178,6 +206,12 @@ impl App {
                 self.mesh_waiting = mesh_waiting;
                 if !mesh_waiting {
                     self.mesh_key = Some(mesh_key);
+                    if mesh_planned {
+                        self.mesh_previewed = mesh_previewed;
+                    }
+                }
+                if canvas_planned {
+                    self.canvas_previewed = canvas_previewed;
                 }
                 self.canvas_key = Some(canvas_key);
                 if pixels.is_some() {
@@ -193,6 +227,9 @@ impl App {
         };
         self.apply_panel(actions)?;
         let kind = if presented && self.mesh_waiting { FrameKind::Waiting } else { kind };
-        Ok(presented.then_some(kind))
+        // The frames that rendered the mesh view's `key` image time the preview's model.
+        let sample = mesh_planned && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
+        let scale = if mesh_changed || canvas_changed { scale } else { 1.0 };
+        Ok(presented.then_some(Drawn { kind, scale, sample }))
     }
 }

@@ -18,6 +18,7 @@ pub mod handler;
 pub mod lighting;
 pub mod options;
 pub mod panel;
+pub mod preview;
 pub mod recovery;
 pub mod report;
 pub mod state;
@@ -46,7 +47,7 @@ use stats::{FrameKind, FrameStat};
 use view::Gpu;
 
 use lighting::{light_from, EnvSummary};
-pub use options::{check_size, clamp_to_display, Options, MAX_WINDOW_SIDE};
+pub use options::{check_frame_budget, check_size, clamp_to_display, Options, MAX_WINDOW_SIDE};
 
 struct App {
     opts: Options,
@@ -86,8 +87,14 @@ struct App {
     curves: Option<(CanvasKey, graph::Curves)>,
     /// Wall-clock milliseconds of each frame drawn (record, submit, present).
     frame_ms: Vec<f64>,
-    /// Frames submitted whose GPU times are not in yet: number → (wall ms, kind).
-    in_flight: Vec<(u64, f64, FrameKind)>,
+    /// Frames submitted whose GPU times are not in yet, with their wall ms.
+    in_flight: Vec<(u64, f64, frame::Drawn)>,
+    /// The scale of interaction frames (`--frame-budget`).
+    preview: preview::Preview,
+    /// The mesh view, and the canvas, show a preview (smaller than their places): the next frame
+    /// without a change renders them at full size.
+    mesh_previewed: bool,
+    canvas_previewed: bool,
     /// Every frame's statistics (`--frame-stats`).
     frame_stats: Vec<FrameStat>,
     /// Whether the warning that the recovery file cannot be written was printed.
@@ -314,12 +321,12 @@ impl App {
             return Ok(());
         }
         let start = std::time::Instant::now();
-        let kind = self.draw_frame()?;
-        let Some(kind) = kind else { return Ok(()) };
+        let drawn = self.draw_frame()?;
+        let Some(drawn) = drawn else { return Ok(()) };
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         self.frame_ms.push(wall_ms);
         if let Some(g) = self.gpu.as_mut() {
-            self.in_flight.push((g.renderer.frame_number(), wall_ms, kind));
+            self.in_flight.push((g.renderer.frame_number(), wall_ms, drawn));
             let finished = g.renderer.take_finished();
             self.file_finished(finished);
         }
@@ -330,12 +337,18 @@ impl App {
     fn file_finished(&mut self, finished: Vec<crate::vk::frame::Finished>) {
         for f in finished {
             let Some(k) = self.in_flight.iter().position(|e| e.0 == f.number) else { continue };
-            let (_, wall_ms, kind) = self.in_flight.remove(k);
+            let (_, wall_ms, drawn) = self.in_flight.remove(k);
             let passes: Vec<(String, f64)> = f.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
-            if kind != FrameKind::Unchanged {
+            if drawn.sample {
+                // Every pass but the window's compose works on the views' pixels.
+                let scaled = passes.iter().filter(|t| t.0 != "compose").map(|t| t.1).sum::<f64>();
+                self.preview.observe(drawn.scale, wall_ms, scaled);
+            }
+            if drawn.kind != FrameKind::Unchanged {
                 // (+ 0.0: the sum of no passes is -0.0.)
                 let gpu_ms = passes.iter().map(|t| t.1).sum::<f64>() + 0.0;
-                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, passes: passes.clone() });
+                let (kind, scale) = (drawn.kind, drawn.scale);
+                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, scale, passes: passes.clone() });
             }
             self.timings = passes;
         }
@@ -409,6 +422,9 @@ impl App {
 /// Runs the editor until the window closes (or, with `quit`, until the replay is done).
 pub fn run(opts: Options) -> Result<()> {
     check_size(opts.size)?;
+    if let Some(ms) = opts.frame_budget_ms {
+        check_frame_budget(ms)?;
+    }
     for &(w, h) in &opts.resize {
         check_size((w, h)).map_err(|_| {
             Error::input("--resize", format!("{w}x{h}: each side must be within 1 and {MAX_WINDOW_SIDE} pixels"))
@@ -434,6 +450,7 @@ pub fn run(opts: Options) -> Result<()> {
     let event_loop = EventLoop::new().map_err(|e| {
         Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
     })?;
+    let budget = opts.frame_budget_ms.unwrap_or(preview::DEFAULT_BUDGET_MS);
     let mut app = App {
         proxy: event_loop.create_proxy(),
         opts,
@@ -462,6 +479,9 @@ pub fn run(opts: Options) -> Result<()> {
         curves: None,
         frame_ms: Vec::new(),
         in_flight: Vec::new(),
+        preview: preview::Preview::new(budget),
+        mesh_previewed: false,
+        canvas_previewed: false,
         frame_stats: Vec::new(),
         recovery_warned: false,
         egui_ctx: egui::Context::default(),

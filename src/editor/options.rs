@@ -25,6 +25,21 @@ pub struct Options {
     pub resize: Vec<(u32, u32)>,
     pub minimise: bool,
     pub size: (u32, u32),
+    /// Milliseconds an interaction frame may take: views that change are previewed smaller to fit
+    /// (`preview`); `Some(0.0)` renders every frame at full size; `None` is
+    /// [`super::preview::DEFAULT_BUDGET_MS`].
+    pub frame_budget_ms: Option<f64>,
+}
+
+/// Refuses (naming `--frame-budget`) a budget that is not a finite number of milliseconds ≥ 0.
+pub fn check_frame_budget(ms: f64) -> Result<()> {
+    if !(ms.is_finite() && ms >= 0.0) {
+        return Err(Error::input(
+            "--frame-budget",
+            format!("{ms}: expected milliseconds, 0 or more (0 renders every frame at full size)"),
+        ));
+    }
+    Ok(())
 }
 
 /// The longest side of the editor's window (pixels), checked before a window is made: an 8K

@@ -1,14 +1,18 @@
-//! Frame statistics: per frame, wall ms, GPU ms per pass and whether it was an interaction frame
-//! (a change: the fast `key` image) or a refinement frame (more `mis` samples); `--frame-stats`
-//! writes them as JSON and the panel shows the median frame rate.
+//! Frame statistics: per frame, wall ms, GPU ms per pass, the scale its views were rendered at and
+//! whether it was an interaction frame (a change: the fast `key` image, previewed smaller when the
+//! frame budget asks), a settle frame (the same at full size once nothing changes) or a refinement
+//! frame (more `mis` samples); `--frame-stats` writes them as JSON and the panel shows the median
+//! frame rate.
 
 /// What a frame rendered of the mesh view: the fast `key` image after a change (an interaction
 /// frame), `REFINE_STEP` more `mis` samples (a refinement frame), nothing new, or nothing yet
 /// because a lobe pipeline it needs was being built in the background (a waiting frame: the
-/// canvas and the panel respond, the mesh view shows its last image).
+/// canvas and the panel respond, the mesh view shows its last image). A settle frame renders at full
+/// size the views that the interaction frames before it previewed smaller (`preview`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FrameKind {
     Interaction,
+    Settle,
     Refinement,
     Unchanged,
     Waiting,
@@ -19,12 +23,14 @@ pub struct FrameStat {
     pub wall_ms: f64,
     pub gpu_ms: f64,
     pub kind: FrameKind,
+    /// The linear scale the frame's changed views were rendered at (1: full size).
+    pub scale: f64,
     pub passes: Vec<(String, f64)>,
 }
 
-/// `{"device", "size": [W, H], "frames": [{"kind", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
+/// `{"device", "size": [W, H], "frames": [{"kind", "scale", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
 /// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
-/// "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting` frames are those
+/// "settle": {…}, "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting` frames are those
 /// whose mesh view waited for a lobe pipeline built in the background; `skipped_minimised` counts the redraws
 /// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
 /// canvas and how (camera, exposure, light), so that a headless render can reproduce them.
@@ -38,6 +44,7 @@ pub fn frame_stats_json(
     use serde_json::json;
     let kind_name = |k: FrameKind| match k {
         FrameKind::Interaction => "interaction",
+        FrameKind::Settle => "settle",
         FrameKind::Refinement => "refinement",
         FrameKind::Unchanged => "unchanged",
         FrameKind::Waiting => "waiting",
@@ -57,12 +64,13 @@ pub fn frame_stats_json(
     let list: Vec<_> = frames
         .iter()
         .map(|f| {
-            json!({ "kind": kind_name(f.kind), "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
+            json!({ "kind": kind_name(f.kind), "scale": f.scale, "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
                     "passes": f.passes.iter().map(|(n, ms)| json!({ "name": n, "ms": ms })).collect::<Vec<_>>() })
         })
         .collect();
     let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
-                      "interaction": summary(FrameKind::Interaction), "refinement": summary(FrameKind::Refinement),
+                      "interaction": summary(FrameKind::Interaction),
+                      "settle": summary(FrameKind::Settle), "refinement": summary(FrameKind::Refinement),
                       "waiting": summary(FrameKind::Waiting), "skipped_minimised": skipped_minimised, "views": views });
     let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
     s.push('\n');

@@ -34,8 +34,9 @@ struct ComposePush {
     scale: [f32; 4],
     background: [f32; 4],
     region: [u32; 4],
+    sources: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ComposePush>() == 80);
+const _: () = assert!(std::mem::size_of::<ComposePush>() == 96);
 
 /// Which parts of the window a frame rewrites.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -74,15 +75,15 @@ pub struct ComposePass {
 impl ComposePass {
     pub fn new(ctx: &Context) -> Result<ComposePass> {
         let spv = crate::spirv!("compose.comp");
-        let mesh = Pipeline::compute(ctx, spv, "compose.mesh", &BINDINGS, 80, &[1])?;
-        let canvas = match Pipeline::compute(ctx, spv, "compose.canvas", &BINDINGS, 80, &[2]) {
+        let mesh = Pipeline::compute(ctx, spv, "compose.mesh", &BINDINGS, 96, &[1])?;
+        let canvas = match Pipeline::compute(ctx, spv, "compose.canvas", &BINDINGS, 96, &[2]) {
             Ok(p) => p,
             Err(e) => {
                 mesh.destroy(ctx);
                 return Err(e);
             }
         };
-        let grey = match Pipeline::compute(ctx, spv, "compose.grey", &BINDINGS, 80, &[4]) {
+        let grey = match Pipeline::compute(ctx, spv, "compose.grey", &BINDINGS, 96, &[4]) {
             Ok(p) => p,
             Err(e) => {
                 mesh.destroy(ctx);
@@ -94,7 +95,8 @@ impl ComposePass {
     }
 
     /// Writes the `parts` of `window` (left in `GENERAL`, ordered before transfer reads) from `mesh`
-    /// and `canvas` (`RGBA32F`, in `GENERAL`, written by earlier passes); the rest of `window` keeps
+    /// and `canvas` (`RGBA32F`, in `GENERAL`, written by earlier passes; magnified bilinearly where
+    /// smaller than their places in `p`: the editor's previews); the rest of `window` keeps
     /// what earlier frames wrote (`parts.all` drops it and writes everything).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
@@ -126,6 +128,7 @@ impl ComposePass {
             scale: [p.mesh_scale, p.canvas_scale, mx, my],
             background: [BACKGROUND[0] as f32 / 255.0, BACKGROUND[1] as f32 / 255.0, BACKGROUND[2] as f32 / 255.0, 1.0],
             region: [0; 4],
+            sources: [mesh.width, mesh.height, canvas.width, 0],
         };
         let rects = [
             (parts.mesh || parts.all, [p.mesh.0, 0, p.mesh.1, p.mesh.2]),

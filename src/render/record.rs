@@ -76,6 +76,29 @@ fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
 }
 
 impl Renderer {
+    /// Makes `views[slot]` the targets of a `w`×`h` image: the current ones, the spare ones of the
+    /// view's other size (swapped in: the editor alternates between its preview size and the full
+    /// one, each keeping its G-buffer), or new ones (the old current ones become the spare, the old
+    /// spare is freed after the frames in flight). A mesh view's refinement restarts on a switch.
+    fn targets_for(&mut self, slot: usize, w: u32, h: u32) -> Result<()> {
+        let fits = |t: &Option<Targets>| t.as_ref().is_some_and(|t| (t.width, t.height) == (w, h));
+        if fits(&self.views[slot]) {
+            return Ok(());
+        }
+        if !fits(&self.spare[slot]) {
+            let made = Targets::new(&self.ctx, w, h)?;
+            self.idle()?;
+            if let Some(old) = self.spare[slot].replace(made) {
+                old.destroy(&self.ctx);
+            }
+        }
+        std::mem::swap(&mut self.views[slot], &mut self.spare[slot]);
+        if slot == View::Mesh as usize {
+            self.refined = 0;
+        }
+        Ok(())
+    }
+
     /// Records, into the current frame, the composed window image `window`: the mesh view (the
     /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
     /// says (its `mesh_scale` is multiplied by 1 / frames here).
@@ -128,28 +151,19 @@ impl Renderer {
         if refine && settings.estimator != Estimator::Mis {
             return Err(Error::Validation("refinement frames are mis frames".into()));
         }
-        let offset = if refine { self.refined } else { 0 };
-        if refine && offset.saturating_add(settings.spp) > MAX_SPP {
-            return Err(Error::input(
-                "--spp",
-                format!("{} samples after {offset} is more than the limit of {MAX_SPP}", settings.spp),
-            ));
-        }
         let (w, h) = (settings.width, settings.height);
         let mesh_view = settings.view == View::Mesh;
         if mesh_view && (self.env.is_none() || self.mesh.is_none()) {
             return Err(Error::input("render", "a mesh view needs an environment and a mesh"));
         }
         let slot = settings.view as usize;
-        if self.views[slot].as_ref().is_none_or(|t| (t.width, t.height) != (w, h)) {
-            self.idle()?;
-            if let Some(old) = self.views[slot].take() {
-                old.destroy(&self.ctx);
-            }
-            self.views[slot] = Some(Targets::new(&self.ctx, w, h)?);
-            if mesh_view {
-                self.refined = 0;
-            }
+        self.targets_for(slot, w, h)?;
+        let offset = if refine { self.refined } else { 0 };
+        if refine && offset.saturating_add(settings.spp) > MAX_SPP {
+            return Err(Error::input(
+                "--spp",
+                format!("{} samples after {offset} is more than the limit of {MAX_SPP}", settings.spp),
+            ));
         }
         // Which lobes get a pass: non-zero albedo only.
         let prefilter = matches!(settings.estimator, Estimator::Fis | Estimator::Key);

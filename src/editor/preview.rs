@@ -1,0 +1,133 @@
+//! Preview frames: while the user paints, orbits or moves the light, the views that change are
+//! rendered at a fraction of their size — the largest of [`LEVELS`] at which the frame is predicted
+//! to fit the frame budget — and magnified by the compose pass; the first frame in which nothing
+//! changes renders them at full size (a settle frame), and refinement follows. The prediction comes
+//! from the frames just finished: each gives its wall time and the GPU time of the passes whose
+//! pixels scale, `wall = fixed + per_pixel_share · scale²`.
+
+use std::collections::VecDeque;
+
+/// The linear scales a preview may take (1: full size). A few fixed steps, so the preview's targets
+/// are remade only when the step changes, not every frame.
+pub const LEVELS: [f64; 7] = [1.0, 0.875, 0.75, 0.625, 0.5, 0.375, 0.25];
+
+/// The default frame budget (ms): 20 frames a second while the user interacts.
+pub const DEFAULT_BUDGET_MS: f64 = 50.0;
+
+/// How many recent frames the prediction takes the median of.
+const WINDOW: usize = 5;
+
+/// A larger scale is taken only when predicted within this share of the budget (so the scale does
+/// not flip between two steps on the budget's edge).
+const GROW_MARGIN: f64 = 0.8;
+
+/// Chooses the scale of interaction frames.
+#[derive(Clone, Debug)]
+pub struct Preview {
+    /// Milliseconds a frame may take; 0 turns previews off (every frame full size).
+    budget_ms: f64,
+    level: usize,
+    /// Recent frames: (wall ms outside the scaled passes, the scaled passes' GPU ms at scale 1).
+    seen: VecDeque<(f64, f64)>,
+}
+
+impl Preview {
+    pub fn new(budget_ms: f64) -> Preview {
+        Preview { budget_ms, level: 0, seen: VecDeque::new() }
+    }
+
+    /// The linear scale of the next interaction frame's views.
+    pub fn scale(&self) -> f64 {
+        LEVELS[self.level]
+    }
+
+    /// A view of `size` at `scale` (each side at least 1 pixel).
+    pub fn size(size: (u32, u32), scale: f64) -> (u32, u32) {
+        let side = |s: u32| ((s as f64 * scale).round() as u32).clamp(1, s.max(1));
+        (side(size.0), side(size.1))
+    }
+
+    /// A finished frame whose views were rendered at `scale`: its wall time and the GPU time of its
+    /// passes that scale with the views' pixels (ms). Chooses the next interaction frame's scale.
+    pub fn observe(&mut self, scale: f64, wall_ms: f64, scaled_ms: f64) {
+        let usable = |v: f64| v.is_finite() && v >= 0.0;
+        if self.budget_ms <= 0.0 || !(scale > 0.0) || !usable(wall_ms) || !usable(scaled_ms) {
+            return;
+        }
+        self.seen.push_back(((wall_ms - scaled_ms).max(0.0), scaled_ms / (scale * scale)));
+        while self.seen.len() > WINDOW {
+            self.seen.pop_front();
+        }
+        let fixed = crate::measure::stats(&self.seen.iter().map(|s| s.0).collect::<Vec<_>>()).0;
+        let full = crate::measure::stats(&self.seen.iter().map(|s| s.1).collect::<Vec<_>>()).0;
+        let predicted = |level: usize| fixed + full * LEVELS[level] * LEVELS[level];
+        let fits =
+            |level: usize| predicted(level) <= self.budget_ms * if level < self.level { GROW_MARGIN } else { 1.0 };
+        self.level = (0..LEVELS.len()).find(|&l| fits(l)).unwrap_or(LEVELS.len() - 1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_over_budget_shrinks_the_preview_until_it_fits() {
+        let mut p = Preview::new(50.0);
+        assert_eq!(p.scale(), 1.0);
+        // 200 ms of scaled passes and 20 ms besides: 20 + 200 s² ≤ 50 first at s = 0.375 (48.1 ms).
+        p.observe(1.0, 220.0, 200.0);
+        assert_eq!(p.scale(), 0.375);
+        // Frames at that scale that cost what the model says keep it.
+        for _ in 0..10 {
+            p.observe(0.375, 20.0 + 200.0 * 0.375 * 0.375, 200.0 * 0.375 * 0.375);
+            assert_eq!(p.scale(), 0.375);
+        }
+    }
+
+    #[test]
+    fn a_fast_device_stays_at_full_size_and_a_slow_one_at_the_smallest_step() {
+        let mut fast = Preview::new(50.0);
+        fast.observe(1.0, 2.0, 1.5);
+        assert_eq!(fast.scale(), 1.0);
+        let mut slow = Preview::new(50.0);
+        // Even the smallest step (20 + 2000/16 = 145 ms) misses the budget: take it anyway.
+        slow.observe(1.0, 2020.0, 2000.0);
+        assert_eq!(slow.scale(), 0.25);
+    }
+
+    #[test]
+    fn the_scale_grows_back_only_with_room_to_spare() {
+        let mut p = Preview::new(50.0);
+        p.observe(1.0, 220.0, 200.0);
+        assert_eq!(p.scale(), 0.375);
+        // The scaled passes become 4× cheaper (a simpler material): 20 + 50 s² ≤ 50 at s = 0.75
+        // (48.1 ms), which is within the budget but not within 80 % of it; 0.625 (39.5) is.
+        for _ in 0..WINDOW {
+            p.observe(0.375, 20.0 + 50.0 * 0.375 * 0.375, 50.0 * 0.375 * 0.375);
+        }
+        assert_eq!(p.scale(), 0.625);
+    }
+
+    #[test]
+    fn a_zero_budget_or_a_meaningless_time_changes_nothing() {
+        let mut off = Preview::new(0.0);
+        off.observe(1.0, 5000.0, 4900.0);
+        assert_eq!(off.scale(), 1.0);
+        let mut p = Preview::new(50.0);
+        for (s, wall, scaled) in
+            [(1.0, f64::NAN, 1.0), (1.0, 10.0, -1.0), (0.0, 300.0, 200.0), (1.0, f64::INFINITY, 1.0)]
+        {
+            p.observe(s, wall, scaled);
+        }
+        assert_eq!(p.scale(), 1.0);
+        assert!(p.seen.is_empty());
+    }
+
+    #[test]
+    fn preview_sizes_keep_at_least_a_pixel() {
+        assert_eq!(Preview::size((500, 720), 0.25), (125, 180));
+        assert_eq!(Preview::size((1, 3), 0.25), (1, 1));
+        assert_eq!(Preview::size((480, 480), 1.0), (480, 480));
+    }
+}
