@@ -340,8 +340,8 @@ impl App {
             let (_, wall_ms, drawn) = self.in_flight.remove(k);
             let passes: Vec<(String, f64)> = f.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
             if drawn.sample {
-                // Every pass but the window's compose works on the views' pixels.
-                let scaled = passes.iter().filter(|t| t.0 != "compose").map(|t| t.1).sum::<f64>();
+                // Every pass but the window's own works on the views' pixels.
+                let scaled = passes.iter().filter(|t| !view::WINDOW_PASSES.contains(&t.0.as_str())).map(|t| t.1).sum();
                 self.preview.observe(drawn.scale, wall_ms, scaled);
             }
             if drawn.kind != FrameKind::Unchanged {

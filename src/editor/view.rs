@@ -23,6 +23,10 @@ use crate::vk::surface::{self, Surface};
 use crate::vk::swapchain::{Acquired, Swapchain};
 use crate::vk::{Buffer, Context, Image};
 
+/// The passes of a frame that work on the window's pixels, not the views' (their cost does not
+/// change with a preview's scale).
+pub const WINDOW_PASSES: [&str; 3] = ["compose", "window copy", "panel"];
+
 /// What one frame draws.
 pub struct Plan<'a> {
     pub material: &'a Material,
@@ -279,7 +283,6 @@ impl Gpu {
         let (cmd, _) = self.renderer.frame_commands();
         let image = sc.images[index as usize];
         let range = barrier::color();
-        let raw = ctx.raw();
         let layers = vk::ImageSubresourceLayers {
             aspect_mask: vk::ImageAspectFlags::COLOR,
             mip_level: 0,
@@ -292,52 +295,65 @@ impl Gpu {
             .src_offsets(corner)
             .dst_subresource(layers)
             .dst_offsets(corner);
-        barrier::image(
-            ctx,
-            cmd,
-            image,
-            range,
-            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
-            (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::NONE),
-            barrier::TRANSFER_WRITE,
-        );
-        // SAFETY: `cmd` is recording; the composed image (GENERAL, its writes ordered before transfer
-        // reads by the compose pass) and the acquired swapchain image (TRANSFER_DST) have this size.
-        unsafe {
-            raw.cmd_blit_image(
+        let extent = sc.extent;
+        let view = sc.views[index as usize];
+        let window_raw = window_image.raw;
+        // The window's copy and the tool panel are timed as passes too: on a CPU device they are
+        // part of what the frame costs.
+        self.renderer.time("window copy", |ctx, cmd| {
+            barrier::image(
+                ctx,
                 cmd,
-                window_image.raw,
-                vk::ImageLayout::GENERAL,
                 image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[blit],
-                vk::Filter::NEAREST,
-            )
-        };
-        barrier::image(
-            ctx,
-            cmd,
-            image,
-            range,
-            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
-            barrier::TRANSFER_WRITE,
-            barrier::COLOR_ATTACHMENT,
-        );
+                range,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::NONE),
+                barrier::TRANSFER_WRITE,
+            );
+            // SAFETY: `cmd` is recording; the composed image (GENERAL, its writes ordered before
+            // transfer reads by the compose pass) and the acquired swapchain image (TRANSFER_DST) have
+            // this size.
+            unsafe {
+                ctx.raw().cmd_blit_image(
+                    cmd,
+                    window_raw,
+                    vk::ImageLayout::GENERAL,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[blit],
+                    vk::Filter::NEAREST,
+                )
+            };
+            barrier::image(
+                ctx,
+                cmd,
+                image,
+                range,
+                (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL),
+                barrier::TRANSFER_WRITE,
+                barrier::COLOR_ATTACHMENT,
+            );
+            Ok(())
+        })?;
         let attachment = [vk::RenderingAttachmentInfo::default()
-            .image_view(sc.views[index as usize])
+            .image_view(view)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE)];
-        let extent = sc.extent;
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
         let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&attachment);
-        // SAFETY: the swapchain image is a colour attachment in the layout named.
-        unsafe { raw.cmd_begin_rendering(cmd, &info) };
-        let drawn =
-            ui.cmd_draw(cmd, extent, plan.ui.2, plan.ui.1).map_err(|e| Error::NoDevice(format!("the tool panel: {e}")));
-        // SAFETY: rendering began above.
-        unsafe { raw.cmd_end_rendering(cmd) };
-        drawn?;
+        self.renderer.time("panel", |ctx, cmd| {
+            // SAFETY: the swapchain image is a colour attachment in the layout named.
+            unsafe { ctx.raw().cmd_begin_rendering(cmd, &info) };
+            let drawn = ui
+                .cmd_draw(cmd, extent, plan.ui.2, plan.ui.1)
+                .map_err(|e| Error::NoDevice(format!("the tool panel: {e}")));
+            // SAFETY: rendering began above.
+            unsafe { ctx.raw().cmd_end_rendering(cmd) };
+            drawn
+        })?;
+        let ctx = &self.renderer.ctx;
+        let raw = ctx.raw();
         let present = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
         if let (true, Some(buffer)) = (plan.capture, self.capture.as_ref()) {
             barrier::image(

@@ -359,7 +359,9 @@ impl Renderer {
     pub fn begin_frame(&mut self, material: &Material) -> Result<()> {
         let n = material.lobes.len() as u32;
         let ring = self.ring.as_mut().expect("ring lives until drop");
-        ring.begin(&self.ctx, 8 + n, 8 + n)?;
+        // Passes: G-buffer, background, diffuse, a pass per lobe, denoise, canvas, compose, and the
+        // caller's window copy and panel (refinement frames have fewer).
+        ring.begin(&self.ctx, 8 + n, 10 + n)?;
         if let Err(e) = ring.current().upload(&self.ctx, "material", &gpu::material_bytes(material)) {
             let _ = ring.abandon(&self.ctx);
             return Err(e);
@@ -404,6 +406,15 @@ impl Renderer {
     pub fn frame_commands(&self) -> (vk::CommandBuffer, vk::Semaphore) {
         let f = self.ring.as_ref().expect("ring lives until drop").current_ref();
         (f.cmd, f.acquired)
+    }
+
+    /// Records the caller's own commands into the frame being recorded (the window's copy, the tool
+    /// panel), timed as a pass named `name`.
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce(&Context, vk::CommandBuffer) -> Result<T>) -> Result<T> {
+        let ring = self.ring.as_mut().expect("ring lives until drop");
+        let frame = ring.current();
+        let cmd = frame.cmd;
+        frame.timestamps.time(&self.ctx, cmd, name, || f(&self.ctx, cmd))
     }
 
     /// The number of the frame being recorded.
