@@ -134,8 +134,7 @@ fn alternating_a_preview_size_and_the_full_size_renders_what_each_renders_afresh
     let fresh = |s: &Settings| renderer().render(&m, s).unwrap().image;
     let (want_full, want_small) = (fresh(&full), fresh(&small));
     let mut r = renderer();
-    // Full, preview, full, preview, and a third size (which replaces the older spare), then full.
-    let third = mesh_view(32, 24);
+    // Full, preview, full, preview: each size's image as rendered afresh.
     for (k, (s, want)) in
         [(&full, &want_full), (&small, &want_small), (&full, &want_full), (&small, &want_small)].into_iter().enumerate()
     {
@@ -143,9 +142,24 @@ fn alternating_a_preview_size_and_the_full_size_renders_what_each_renders_afresh
         let err = reference::relative_l1(&got, want).unwrap();
         assert!(err < 1e-6, "frame {k} ({}x{}): {err}", s.width, s.height);
     }
-    let _ = record(&mut r, &m, &third);
+    // A third size (a preview that changed its step) keeps the full size's targets: the full-size
+    // frame after it reuses its G-buffer (no `gbuffer` pass) and renders the same image.
+    let rasterised = |r: &mut Renderer| {
+        // The last frame that timed passes (`read_mesh_view`'s own readback frame times none).
+        let finished = r.take_finished();
+        let frame = finished.iter().rev().find(|f| !f.timings.is_empty()).expect("a rendered frame");
+        frame.timings.iter().any(|t| t.name == "gbuffer")
+    };
+    let _ = record(&mut r, &m, &mesh_view(32, 24));
+    assert!(rasterised(&mut r), "a new size rasterises its G-buffer");
     let got = record(&mut r, &m, &full);
+    assert!(!rasterised(&mut r), "the full size's G-buffer was dropped by a third size");
     assert!(reference::relative_l1(&got, &want_full).unwrap() < 1e-6);
+    // A fourth size drops the least recently used (the 24×18 preview), which then starts over.
+    let _ = record(&mut r, &m, &mesh_view(40, 30));
+    let got = record(&mut r, &m, &small);
+    assert!(rasterised(&mut r), "four sizes were kept");
+    assert!(reference::relative_l1(&got, &want_small).unwrap() < 1e-6);
     // A refinement on the full size after a preview starts its own sum (the preview restarted it).
     let _ = record(&mut r, &m, &small);
     let mis = Settings { estimator: Estimator::Mis, spp: 16, ..full.clone() };

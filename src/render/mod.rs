@@ -122,9 +122,9 @@ pub struct Renderer {
     env: Option<GpuEnvironment>,
     mesh: Option<GpuMesh>,
     /// The persistent targets of each view (indexed by `View as usize`), and each view's spare
-    /// targets of the size it had before (`record::targets_for`).
+    /// targets of the sizes it had before, most recent first (`record::targets_for`).
     views: [Option<Targets>; 2],
-    spare: [Option<Targets>; 2],
+    spare: [Vec<Targets>; 2],
     /// `mis` samples summed in the mesh view's refinement, and in how many frames.
     refined: u32,
     refine_frames: u32,
@@ -166,7 +166,7 @@ impl Renderer {
             env: None,
             mesh: None,
             views: [None, None],
-            spare: [None, None],
+            spare: [Vec::new(), Vec::new()],
             refined: 0,
             refine_frames: 0,
             readback: None,
@@ -444,7 +444,10 @@ impl Drop for Renderer {
         if let Some(m) = self.mesh.take() {
             m.destroy(&self.ctx);
         }
-        for t in self.views.iter_mut().chain(self.spare.iter_mut()).filter_map(Option::take) {
+        for t in self.views.iter_mut().filter_map(Option::take) {
+            t.destroy(&self.ctx);
+        }
+        for t in self.spare.iter_mut().flat_map(std::mem::take) {
             t.destroy(&self.ctx);
         }
         if let Some(b) = self.readback.take() {

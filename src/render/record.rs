@@ -18,6 +18,10 @@ use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context};
 
+/// How many sizes of targets a view keeps: the full size and two preview steps (the editor's
+/// preview may change its step without dropping the full size's G-buffer).
+const SIZES_KEPT: usize = 3;
+
 /// What a pass records with: the command buffer, this frame's descriptor pool, the shared push
 /// constants, the targets and the environment.
 pub struct Recording<'a> {
@@ -76,23 +80,32 @@ fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
 }
 
 impl Renderer {
-    /// Makes `views[slot]` the targets of a `w`×`h` image: the current ones, the spare ones of the
-    /// view's other size (swapped in: the editor alternates between its preview size and the full
-    /// one, each keeping its G-buffer), or new ones (the old current ones become the spare, the old
-    /// spare is freed after the frames in flight). A mesh view's refinement restarts on a switch.
+    /// Makes `views[slot]` the targets of a `w`×`h` image: the current ones, spare ones of that size
+    /// (the editor alternates between the full size and its previews' sizes, each keeping its
+    /// G-buffer), or new ones. The replaced current targets become the most recent spare; past
+    /// [`SIZES_KEPT`] sizes the least recently used are freed after the frames in flight. A mesh
+    /// view's refinement restarts on a switch.
     fn targets_for(&mut self, slot: usize, w: u32, h: u32) -> Result<()> {
-        let fits = |t: &Option<Targets>| t.as_ref().is_some_and(|t| (t.width, t.height) == (w, h));
-        if fits(&self.views[slot]) {
+        let fits = |t: &Targets| (t.width, t.height) == (w, h);
+        if self.views[slot].as_ref().is_some_and(fits) {
             return Ok(());
         }
-        if !fits(&self.spare[slot]) {
-            let made = Targets::new(&self.ctx, w, h)?;
-            self.idle()?;
-            if let Some(old) = self.spare[slot].replace(made) {
-                old.destroy(&self.ctx);
+        let targets = match self.spare[slot].iter().position(fits) {
+            Some(i) => self.spare[slot].remove(i),
+            None => {
+                let made = Targets::new(&self.ctx, w, h)?;
+                if self.spare[slot].len() + 1 >= SIZES_KEPT {
+                    self.idle()?;
+                    if let Some(old) = self.spare[slot].pop() {
+                        old.destroy(&self.ctx);
+                    }
+                }
+                made
             }
+        };
+        if let Some(old) = self.views[slot].replace(targets) {
+            self.spare[slot].insert(0, old);
         }
-        std::mem::swap(&mut self.views[slot], &mut self.spare[slot]);
         if slot == View::Mesh as usize {
             self.refined = 0;
         }
