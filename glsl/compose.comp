@@ -10,7 +10,7 @@ layout(set = 0, binding = 2, rgba32f) readonly uniform image2D canvas;
 layout(push_constant) uniform Push {
     uvec4 window_size;  // W, H, mesh view height, 1 to draw the marker
     uvec4 views;        // mesh view x, width; canvas x, side
-    vec4 scale;         // mesh view scale (exposure / frames), canvas exposure, marker x, y (pixels)
+    vec4 scale;         // mesh view scale (exposure / summed samples), canvas exposure, marker x, y (pixels)
     vec4 background;    // window grey, 0..1 per channel
     uvec4 region;       // the rectangle this dispatch writes: x, y, width, height
     uvec4 sources;      // the mesh view's image width, height; the canvas image's side; 0

@@ -114,7 +114,9 @@ fn idle_frames_refine_the_mesh_view() {
             "--quit",
             "--converge",
         ])
-        .args(["--size", "256x144", "--screenshot"])
+        // Without a frame budget every refinement frame adds 16 samples (see the next test for the
+        // budget's steps).
+        .args(["--frame-budget", "0", "--size", "256x144", "--screenshot"])
         .arg(&shot)
         .arg("--frame-stats")
         .arg(&stats)
@@ -148,6 +150,7 @@ fn idle_frames_refine_the_mesh_view() {
         let ms = |n: &str| passes.iter().filter(|p| p["name"] == n).map(|p| p["ms"].as_f64().unwrap()).sum::<f64>();
         if f["kind"] == "refinement" {
             assert!(has("mis") && has("accumulate") && !has("canvas"), "{f}");
+            assert_eq!(f["spp"], 16, "{f}");
             // The timestamps time the passes they bracket: 16 `mis` samples a pixel over the
             // sphere measure 100x the compose pass (one read and write a window pixel; 98-295 ms
             // against 0.9-6 ms, release build). Until session 11 lavapipe read a compute pass's
@@ -166,6 +169,38 @@ fn idle_frames_refine_the_mesh_view() {
     assert_eq!(doc["views"]["mesh"]["refined_spp"], 1024);
     assert_eq!(doc["size"], serde_json::json!([256, 144]));
     assert_eq!(doc["refinement"]["frames"], 64);
+}
+
+/// With a frame budget (the default, 50 ms), a refinement frame adds as many samples as the budget
+/// holds by the refinement frames just finished — one before any was timed, at most 16 — so that a
+/// stroke never waits behind seconds of refinement (16 samples at 1280×720 took 1.7–2.5 s on
+/// lavapipe); the samples still add up to 1024, weighed by their count (`accumulate`).
+#[test]
+fn refinement_frames_add_what_the_frame_budget_holds() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let stats = dir.path().join("frames.json");
+    let run = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_brdf-shop"), "edit", "--mesh", "sphere"])
+        .args(["--quit", "--converge", "--size", "256x144", "--frame-stats"])
+        .arg(&stats)
+        .env("BRDF_SHOP_RECOVERY", dir.path().join("recovery.brdf.json"))
+        .output()
+        .expect("xvfb-run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success() && !stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("mesh view at mis 1024 spp"), "{stderr}");
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let steps: Vec<u64> = doc["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["kind"] == "refinement")
+        .map(|f| f["spp"].as_u64().unwrap())
+        .collect();
+    assert_eq!(steps.iter().sum::<u64>(), 1024, "{steps:?}");
+    assert_eq!(steps[0], 1, "the first refinement frame has nothing to go by: {steps:?}");
+    assert!(steps.iter().all(|&s| (1..=16).contains(&s)), "{steps:?}");
+    assert_eq!(doc["views"]["mesh"]["refined_spp"], 1024);
 }
 
 /// Unsaved work is offered back, not forced: a start that finds a recovery file says so and keeps

@@ -340,6 +340,21 @@ fn refinement_frames_accumulate_on_the_gpu_into_one_estimate() {
     let err = reference::relative_l1(&avg, &whole).unwrap();
     assert!(err < 1e-5, "{err}");
     assert!(reference::relative_l1(&first.unwrap(), &whole).unwrap() > 1e-4);
+    // Frames of different sample counts (the editor's budget sets each): 8 + 16 + 40 samples are the
+    // same 64 (each frame weighs its mean by its samples; a mean over frames would give the 8-sample
+    // frame as much weight as the 40-sample one).
+    // A fresh frame restarts the sum; the refinement then starts again from sample 0.
+    r.begin_frame(m).unwrap();
+    assert_eq!(r.record(m, &settings(24, 8, Estimator::Key), Progress::Fresh).unwrap(), Recorded::Done);
+    r.submit_frame(None, None).unwrap();
+    for spp in [8, 16, 40] {
+        r.begin_frame(m).unwrap();
+        assert_eq!(r.record(m, &settings(24, spp, Estimator::Mis), Progress::Refine).unwrap(), Recorded::Done);
+        r.submit_frame(None, None).unwrap();
+    }
+    assert_eq!(r.refined_samples(), 64);
+    let err = reference::relative_l1(&r.read_mesh_view().unwrap(), &whole).unwrap();
+    assert!(err < 1e-5, "unequal frames: {err}");
     r.begin_frame(m).unwrap();
     assert_eq!(r.record(m, &settings(24, 16, Estimator::Mis), Progress::Fresh).unwrap(), Recorded::Done);
     r.submit_frame(None, None).unwrap();

@@ -30,6 +30,8 @@ pub(super) struct Drawn {
     pub scale: f64,
     /// It rendered the mesh view's `key` image (an interaction or a settle frame).
     pub sample: bool,
+    /// The samples per pixel its mesh view took (a refinement frame: those it added; 0: none).
+    pub spp: u32,
 }
 
 /// What the canvas was last rendered for.
@@ -98,7 +100,9 @@ impl App {
         } else if self.mesh_previewed {
             (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Settle)
         } else if refining && refined < REFINE_MAX {
-            let mis = crate::render::Settings { estimator: Estimator::Mis, spp: REFINE_STEP, ..mesh_settings.clone() };
+            // As many samples as the budget holds (`preview`), up to the step and the end.
+            let spp = self.preview.refine_step(REFINE_STEP.min(REFINE_MAX - refined));
+            let mis = crate::render::Settings { estimator: Estimator::Mis, spp, ..mesh_settings.clone() };
             (Some((mis, Progress::Refine)), FrameKind::Refinement)
         } else {
             (None, FrameKind::Unchanged)
@@ -134,8 +138,9 @@ impl App {
         });
         worker.request(&m);
         let report = worker.latest(&m);
+        let mesh_spp = mesh.as_ref().map_or(0, |m| m.0.spp);
         let shown_refined = if kind == FrameKind::Refinement {
-            refined + REFINE_STEP
+            refined + mesh_spp
         } else if matches!(kind, FrameKind::Interaction | FrameKind::Settle) {
             0
         } else {
@@ -230,6 +235,11 @@ impl App {
         // The frames that rendered the mesh view's `key` image time the preview's model.
         let sample = mesh_planned && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
         let scale = if mesh_changed || canvas_changed { scale } else { 1.0 };
-        Ok(presented.then_some(Drawn { kind, scale, sample }))
+        Ok(presented.then_some(Drawn {
+            kind,
+            scale,
+            sample,
+            spp: if presented && self.mesh_waiting { 0 } else { mesh_spp },
+        }))
     }
 }

@@ -139,7 +139,8 @@ pub const MINIMISED_POLL: std::time::Duration = std::time::Duration::from_millis
 /// How long a scripted minimise keeps the window minimised.
 pub const MINIMISED_HOLD: std::time::Duration = std::time::Duration::from_millis(500);
 
-/// Samples per pixel added by each refining frame, and where refinement stops.
+/// The most samples per pixel a refining frame adds (fewer when the frame budget asks), and where
+/// refinement stops.
 pub const REFINE_STEP: u32 = 16;
 pub const REFINE_MAX: u32 = 1024;
 
@@ -339,6 +340,10 @@ impl App {
             let Some(k) = self.in_flight.iter().position(|e| e.0 == f.number) else { continue };
             let (_, wall_ms, drawn) = self.in_flight.remove(k);
             let passes: Vec<(String, f64)> = f.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
+            if drawn.kind == FrameKind::Refinement {
+                let sampling = passes.iter().filter(|t| t.0 == "mis").map(|t| t.1).sum();
+                self.preview.observe_refinement(wall_ms, sampling, drawn.spp);
+            }
             if drawn.sample {
                 // Every pass but the window's own works on the views' pixels.
                 let scaled = passes.iter().filter(|t| !view::WINDOW_PASSES.contains(&t.0.as_str())).map(|t| t.1).sum();
@@ -347,8 +352,8 @@ impl App {
             if drawn.kind != FrameKind::Unchanged {
                 // (+ 0.0: the sum of no passes is -0.0.)
                 let gpu_ms = passes.iter().map(|t| t.1).sum::<f64>() + 0.0;
-                let (kind, scale) = (drawn.kind, drawn.scale);
-                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, scale, passes: passes.clone() });
+                let (kind, scale, spp) = (drawn.kind, drawn.scale, drawn.spp);
+                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, scale, spp, passes: passes.clone() });
             }
             self.timings = passes;
         }

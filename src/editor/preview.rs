@@ -4,6 +4,11 @@
 //! changes renders them at full size (a settle frame), and refinement follows. The prediction comes
 //! from the frames just finished: each gives its wall time and the GPU time of the passes whose
 //! pixels scale, `wall = fixed + per_pixel_share · scale²`.
+//!
+//! Refinement frames keep to the same budget by the samples they add (at most `REFINE_STEP`):
+//! `wall = fixed + per_sample · samples`, from the refinement frames just finished; the first adds
+//! one sample. A stroke that starts while the view refines waits for the frames in flight, so on a
+//! slow device a 16-sample frame (1.7–2.5 s at 1280×720 on lavapipe) was a stall of seconds.
 
 use std::collections::VecDeque;
 
@@ -29,11 +34,13 @@ pub struct Preview {
     level: usize,
     /// Recent frames: (wall ms outside the scaled passes, the scaled passes' GPU ms at scale 1).
     seen: VecDeque<(f64, f64)>,
+    /// Recent refinement frames: (wall ms outside the sampling pass, its GPU ms a sample).
+    refined: VecDeque<(f64, f64)>,
 }
 
 impl Preview {
     pub fn new(budget_ms: f64) -> Preview {
-        Preview { budget_ms, level: 0, seen: VecDeque::new() }
+        Preview { budget_ms, level: 0, seen: VecDeque::new(), refined: VecDeque::new() }
     }
 
     /// The linear scale of the next interaction frame's views.
@@ -58,13 +65,51 @@ impl Preview {
         while self.seen.len() > WINDOW {
             self.seen.pop_front();
         }
-        let fixed = crate::measure::stats(&self.seen.iter().map(|s| s.0).collect::<Vec<_>>()).0;
-        let full = crate::measure::stats(&self.seen.iter().map(|s| s.1).collect::<Vec<_>>()).0;
+        let (fixed, full) = medians(&self.seen);
         let predicted = |level: usize| fixed + full * LEVELS[level] * LEVELS[level];
         let fits =
             |level: usize| predicted(level) <= self.budget_ms * if level < self.level { GROW_MARGIN } else { 1.0 };
         self.level = (0..LEVELS.len()).find(|&l| fits(l)).unwrap_or(LEVELS.len() - 1);
     }
+
+    /// A finished refinement frame: its wall time, its sampling pass's GPU time and the samples it
+    /// added. Sets what [`Preview::refine_step`] answers.
+    pub fn observe_refinement(&mut self, wall_ms: f64, sampling_ms: f64, samples: u32) {
+        let usable = |v: f64| v.is_finite() && v >= 0.0;
+        if self.budget_ms <= 0.0 || samples == 0 || !usable(wall_ms) || !usable(sampling_ms) {
+            return;
+        }
+        self.refined.push_back(((wall_ms - sampling_ms).max(0.0), sampling_ms / samples as f64));
+        while self.refined.len() > WINDOW {
+            self.refined.pop_front();
+        }
+    }
+
+    /// The samples the next refinement frame adds, at most `most` (≥ 1): as many as the budget
+    /// holds by the refinement frames just finished, at least one; one before any was timed; `most`
+    /// without a budget.
+    pub fn refine_step(&self, most: u32) -> u32 {
+        let most = most.max(1);
+        if self.budget_ms <= 0.0 {
+            return most;
+        }
+        if self.refined.is_empty() {
+            return 1;
+        }
+        let (fixed, per_sample) = medians(&self.refined);
+        let fit = if per_sample > 0.0 { ((self.budget_ms - fixed) / per_sample).floor() } else { most as f64 };
+        if fit.is_nan() {
+            return 1;
+        }
+        fit.clamp(1.0, most as f64) as u32
+    }
+}
+
+/// The medians of both members of recent observations.
+fn medians(seen: &VecDeque<(f64, f64)>) -> (f64, f64) {
+    let a: Vec<f64> = seen.iter().map(|s| s.0).collect();
+    let b: Vec<f64> = seen.iter().map(|s| s.1).collect();
+    (crate::measure::stats(&a).0, crate::measure::stats(&b).0)
 }
 
 #[cfg(test)]
@@ -122,6 +167,34 @@ mod tests {
         }
         assert_eq!(p.scale(), 1.0);
         assert!(p.seen.is_empty());
+    }
+
+    #[test]
+    fn refinement_frames_add_what_the_budget_holds() {
+        let mut p = Preview::new(50.0);
+        // Nothing timed yet: one sample.
+        assert_eq!(p.refine_step(16), 1);
+        // 110 ms a sample and 20 besides (lavapipe at 1280×720): still one, the least a frame adds.
+        p.observe_refinement(130.0, 110.0, 1);
+        assert_eq!(p.refine_step(16), 1);
+        // 3 ms a sample and 20 besides: (50 − 20) / 3 = 10 samples.
+        let mut q = Preview::new(50.0);
+        q.observe_refinement(26.0, 6.0, 2);
+        assert_eq!(q.refine_step(16), 10);
+        // A fast device: as many as a frame may add, and never more than asked.
+        let mut fast = Preview::new(50.0);
+        fast.observe_refinement(2.0, 0.5, 16);
+        assert_eq!((fast.refine_step(16), fast.refine_step(4)), (16, 4));
+        // Without a budget: always the most.
+        let off = Preview::new(0.0);
+        assert_eq!(off.refine_step(16), 16);
+        // Meaningless times are not taken; a sampling pass that read 0 ms is a fast device.
+        let mut z = Preview::new(50.0);
+        z.observe_refinement(f64::NAN, 1.0, 1);
+        z.observe_refinement(10.0, 1.0, 0);
+        assert_eq!(z.refine_step(16), 1);
+        z.observe_refinement(10.0, 0.0, 16);
+        assert_eq!(z.refine_step(16), 16);
     }
 
     #[test]

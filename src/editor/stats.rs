@@ -5,7 +5,7 @@
 //! frame rate.
 
 /// What a frame rendered of the mesh view: the fast `key` image after a change (an interaction
-/// frame), `REFINE_STEP` more `mis` samples (a refinement frame), nothing new, or nothing yet
+/// frame), up to `REFINE_STEP` more `mis` samples (a refinement frame), nothing new, or nothing yet
 /// because a lobe pipeline it needs was being built in the background (a waiting frame: the
 /// canvas and the panel respond, the mesh view shows its last image). A settle frame renders at full
 /// size the views that the interaction frames before it previewed smaller (`preview`).
@@ -25,10 +25,12 @@ pub struct FrameStat {
     pub kind: FrameKind,
     /// The linear scale the frame's changed views were rendered at (1: full size).
     pub scale: f64,
+    /// The samples per pixel of its mesh view (a refinement frame: those it added; 0: none rendered).
+    pub spp: u32,
     pub passes: Vec<(String, f64)>,
 }
 
-/// `{"device", "size": [W, H], "frames": [{"kind", "scale", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
+/// `{"device", "size": [W, H], "frames": [{"kind", "scale", "spp", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
 /// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
 /// "settle": {…}, "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting` frames are those
 /// whose mesh view waited for a lobe pipeline built in the background; `skipped_minimised` counts the redraws
@@ -64,7 +66,7 @@ pub fn frame_stats_json(
     let list: Vec<_> = frames
         .iter()
         .map(|f| {
-            json!({ "kind": kind_name(f.kind), "scale": f.scale, "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
+            json!({ "kind": kind_name(f.kind), "scale": f.scale, "spp": f.spp, "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
                     "passes": f.passes.iter().map(|(n, ms)| json!({ "name": n, "ms": ms })).collect::<Vec<_>>() })
         })
         .collect();

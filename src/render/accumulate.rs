@@ -1,5 +1,6 @@
-//! Progressive refinement on the GPU: each refinement frame's estimate (the accumulation image) is
-//! added into the mesh view's running sum (`Targets::sum`); the compose pass shows sum / frames.
+//! Progressive refinement on the GPU: each refinement frame's estimate (the accumulation image, the
+//! mean of its samples) times its sample count is added into the mesh view's running sum
+//! (`Targets::sum`); the compose pass shows sum / samples, so frames may add different counts.
 //! Nothing goes through the host.
 
 use ash::vk;
@@ -18,11 +19,11 @@ pub struct AccumulatePass {
 
 impl AccumulatePass {
     pub fn new(ctx: &Context) -> Result<AccumulatePass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("accumulate.comp"), "accumulate", &BINDINGS, 16, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("accumulate.comp"), "accumulate", &BINDINGS, 32, &[])?;
         Ok(AccumulatePass { pipeline })
     }
 
-    /// Adds `targets.accum` into `targets.sum` (`first`: starts the sum instead). The sum stays in
+    /// Adds `targets.accum` times `samples` into `targets.sum` (`first`: starts the sum instead). The sum stays in
     /// `GENERAL`, its writes ordered before later compute and transfer reads.
     pub fn record(
         &self,
@@ -31,6 +32,7 @@ impl AccumulatePass {
         pool: vk::DescriptorPool,
         targets: &Targets,
         first: bool,
+        samples: u32,
     ) -> Result<()> {
         if first {
             targets.sum.discard_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
@@ -41,7 +43,7 @@ impl AccumulatePass {
             set,
             &[Binding::StorageImage(targets.accum.view), Binding::StorageImage(targets.sum.view)],
         );
-        let push = [targets.width, targets.height, first as u32, 0];
+        let push = [targets.width, targets.height, first as u32, 0, (samples as f32).to_bits(), 0, 0, 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
         // SAFETY: `cmd` is recording with the compute pipeline bound.
         unsafe { ctx.raw().cmd_dispatch(cmd, targets.width.div_ceil(8), targets.height.div_ceil(8), 1) };

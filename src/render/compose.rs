@@ -1,5 +1,5 @@
 //! The editor's window on the GPU: the mesh view (its last frame, or the refinement's sum over the
-//! frame count) and the canvas, each with its exposure and the sRGB curve, the snap marker, and the
+//! sample count) and the canvas, each with its exposure and the sRGB curve, the snap marker, and the
 //! window grey, written into an `RGBA8` storage image that is then copied into the swapchain image.
 //! The image persists across frames: a frame rewrites only the parts whose inputs changed (the
 //! mesh view, the canvas, or everything after a new image or layout), each with a pipeline of its
@@ -60,7 +60,7 @@ pub struct Placement {
     pub mesh: (u32, u32, u32),
     /// The canvas's left edge and side.
     pub canvas: (u32, u32),
-    /// Linear scale of the mesh view (exposure over the number of summed frames) and of the canvas.
+    /// Linear scale of the mesh view (exposure over the number of summed samples) and of the canvas.
     pub mesh_scale: f32,
     pub canvas_scale: f32,
     /// The snap marker's pixel, if shown.

@@ -125,9 +125,8 @@ pub struct Renderer {
     /// targets of the sizes it had before, most recent first (`record::targets_for`).
     views: [Option<Targets>; 2],
     spare: [Vec<Targets>; 2],
-    /// `mis` samples summed in the mesh view's refinement, and in how many frames.
+    /// `mis` samples summed in the mesh view's refinement.
     refined: u32,
-    refine_frames: u32,
     /// The headless path's readback buffer (sized to its last image).
     readback: Option<Buffer>,
     ring: Option<FrameRing>,
@@ -168,7 +167,6 @@ impl Renderer {
             views: [None, None],
             spare: [Vec::new(), Vec::new()],
             refined: 0,
-            refine_frames: 0,
             readback: None,
             ring: Some(ring),
             halton: None,
@@ -336,7 +334,7 @@ impl Renderer {
         );
         ring.submit(&self.ctx, None, None)?;
         ring.wait(&self.ctx)?;
-        let n = if self.refined > 0 { self.refine_frames.max(1) as f32 } else { 1.0 };
+        let n = if self.refined > 0 { self.refined as f32 } else { 1.0 };
         let pixels = readback::pixels(self.readback.as_ref().expect("made above"))
             .into_iter()
             .map(|p| p.map(|v| v / n))

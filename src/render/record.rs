@@ -114,7 +114,7 @@ impl Renderer {
 
     /// Records, into the current frame, the composed window image `window`: the mesh view (the
     /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
-    /// says (its `mesh_scale` is multiplied by 1 / frames here).
+    /// says (its `mesh_scale` is multiplied by 1 / samples here).
     /// Only the `parts` that changed are written (`compose::Parts`); nothing when none did.
     pub fn record_compose(
         &mut self,
@@ -130,8 +130,8 @@ impl Renderer {
         else {
             return Err(Error::Validation("compose before both views were rendered".into()));
         };
-        let (image, frames) = if self.refined > 0 { (&mesh.sum, self.refine_frames) } else { (&mesh.accum, 1) };
-        let p = compose::Placement { mesh_scale: placement.mesh_scale / frames.max(1) as f32, ..*placement };
+        let (image, samples) = if self.refined > 0 { (&mesh.sum, self.refined) } else { (&mesh.accum, 1) };
+        let p = compose::Placement { mesh_scale: placement.mesh_scale / samples as f32, ..*placement };
         let passes = self.passes.as_ref().expect("passes live until drop");
         let ring = self.ring.as_mut().expect("ring lives until drop");
         let f = ring.current();
@@ -345,9 +345,10 @@ impl Renderer {
             }
         }
         if refine {
-            ts.time(ctx, cmd, "accumulate", || passes.accumulate.record(ctx, cmd, pool, targets, offset == 0))?;
+            ts.time(ctx, cmd, "accumulate", || {
+                passes.accumulate.record(ctx, cmd, pool, targets, offset == 0, settings.spp)
+            })?;
             self.refined = offset + settings.spp;
-            self.refine_frames = if offset == 0 { 1 } else { self.refine_frames + 1 };
         } else {
             self.refined = 0;
         }
