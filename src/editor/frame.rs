@@ -28,8 +28,11 @@ pub(super) struct Drawn {
     pub kind: FrameKind,
     /// The linear scale of the views it changed (1: full size).
     pub scale: f64,
-    /// It rendered the mesh view's `key` image (an interaction or a settle frame).
+    /// It rendered the mesh view's `key` image (an interaction or a settle frame), every view it
+    /// rendered at `scale`: the preview's model learns from it.
     pub sample: bool,
+    /// A refinement frame that rendered nothing else: the refinement step's model learns from it.
+    pub refine_sample: bool,
     /// The samples per pixel its mesh view took (a refinement frame: those it added; 0: none).
     pub spp: u32,
 }
@@ -111,9 +114,18 @@ impl App {
             let side = if canvas_changed { canvas_side } else { l.canvas };
             crate::render::Settings { width: side, height: side, view: View::Canvas, ..mesh_settings.clone() }
         });
-        let kind = if kind == FrameKind::Unchanged && canvas.is_some() { FrameKind::Settle } else { kind };
+        // What the mesh view shows (the panel's line); a frame that only settles the canvas is a
+        // settle frame too (one that only previews it is not a frame of the mesh view's: unchanged).
+        let mesh_kind = kind;
+        let canvas_settles = !canvas_changed && self.canvas_previewed;
+        let kind = if kind == FrameKind::Unchanged && canvas_settles { FrameKind::Settle } else { kind };
         let mesh_previewed = mesh_changed && mesh_size != (l.mesh_w, l.height);
         let canvas_previewed = canvas_changed && canvas_side != l.canvas;
+        // The scales the views were rendered at: the preview model learns only from frames whose
+        // views all had one scale, and refinement's from frames that rendered no canvas.
+        let mesh_scale = if mesh_changed { scale } else { 1.0 };
+        let canvas_scale = if canvas_changed { scale } else { 1.0 };
+        let one_scale = canvas.is_none() || mesh.is_none() || mesh_scale == canvas_scale;
         let m = state.material().clone();
         if self.curves.as_ref().is_none_or(|c| c.0 != canvas_key) {
             self.curves = Some((canvas_key.clone(), graph::Curves::new(&m, light)));
@@ -139,9 +151,9 @@ impl App {
         worker.request(&m);
         let report = worker.latest(&m);
         let mesh_spp = mesh.as_ref().map_or(0, |m| m.0.spp);
-        let shown_refined = if kind == FrameKind::Refinement {
+        let shown_refined = if mesh_kind == FrameKind::Refinement {
             refined + mesh_spp
-        } else if matches!(kind, FrameKind::Interaction | FrameKind::Settle) {
+        } else if matches!(mesh_kind, FrameKind::Interaction | FrameKind::Settle) {
             0
         } else {
             refined
@@ -232,14 +244,12 @@ impl App {
         };
         self.apply_panel(actions)?;
         let kind = if presented && self.mesh_waiting { FrameKind::Waiting } else { kind };
-        // The frames that rendered the mesh view's `key` image time the preview's model.
-        let sample = mesh_planned && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
-        let scale = if mesh_changed || canvas_changed { scale } else { 1.0 };
-        Ok(presented.then_some(Drawn {
-            kind,
-            scale,
-            sample,
-            spp: if presented && self.mesh_waiting { 0 } else { mesh_spp },
-        }))
+        // The frames that rendered the mesh view's `key` image at one scale time the preview's model.
+        let waited = presented && self.mesh_waiting;
+        let sample = mesh_planned && !waited && one_scale && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
+        let scale = if mesh_planned { mesh_scale } else { canvas_scale };
+        let refine_sample = kind == FrameKind::Refinement && !canvas_planned;
+        let spp = if waited { 0 } else { mesh_spp };
+        Ok(presented.then_some(Drawn { kind, scale, sample, refine_sample, spp }))
     }
 }

@@ -176,7 +176,13 @@ impl ApplicationHandler for App {
         if self.mesh_waiting {
             return;
         }
-        // Idle: refine the mesh view (not while replaying for a screenshot, which shows the fast
+        // Idle: first render the previewed views at full size (a light dragged on a refined view
+        // previews the canvas alone, and nothing else would ask for that frame).
+        if self.shown && (self.mesh_previewed || self.canvas_previewed) {
+            self.request_redraw();
+            return;
+        }
+        // Then refine the mesh view (not while replaying for a screenshot, which shows the fast
         // image); once refined, nothing is requested and the loop sleeps until the next event.
         let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
         if (!self.opts.quit || self.opts.converge) && self.shown && refined < REFINE_MAX {

@@ -340,7 +340,7 @@ impl App {
             let Some(k) = self.in_flight.iter().position(|e| e.0 == f.number) else { continue };
             let (_, wall_ms, drawn) = self.in_flight.remove(k);
             let passes: Vec<(String, f64)> = f.timings.iter().map(|t| (t.name.clone(), t.ms)).collect();
-            if drawn.kind == FrameKind::Refinement {
+            if drawn.refine_sample {
                 let sampling = passes.iter().filter(|t| t.0 == "mis").map(|t| t.1).sum();
                 self.preview.observe_refinement(wall_ms, sampling, drawn.spp);
             }

@@ -84,32 +84,37 @@ impl Renderer {
     /// (the editor alternates between the full size and its previews' sizes, each keeping its
     /// G-buffer), or new ones. The replaced current targets become the most recent spare; past
     /// [`SIZES_KEPT`] sizes the least recently used are freed after the frames in flight. A mesh
-    /// view's refinement restarts on a switch.
-    fn targets_for(&mut self, slot: usize, w: u32, h: u32) -> Result<()> {
+    /// view's refinement restarts on a switch (a mesh view that then waits for its lobe pipelines
+    /// switches back: `record_view`). Returns whether the current targets were replaced and became
+    /// the first spare ones (false: unchanged, or the view's first targets).
+    fn targets_for(&mut self, slot: usize, w: u32, h: u32) -> Result<bool> {
         let fits = |t: &Targets| (t.width, t.height) == (w, h);
         if self.views[slot].as_ref().is_some_and(fits) {
-            return Ok(());
+            return Ok(false);
         }
         let targets = match self.spare[slot].iter().position(fits) {
             Some(i) => self.spare[slot].remove(i),
             None => {
-                let made = Targets::new(&self.ctx, w, h)?;
                 if self.spare[slot].len() + 1 >= SIZES_KEPT {
                     self.idle()?;
                     if let Some(old) = self.spare[slot].pop() {
                         old.destroy(&self.ctx);
                     }
                 }
-                made
+                Targets::new(&self.ctx, w, h)?
             }
         };
-        if let Some(old) = self.views[slot].replace(targets) {
-            self.spare[slot].insert(0, old);
-        }
+        let switched = match self.views[slot].replace(targets) {
+            Some(old) => {
+                self.spare[slot].insert(0, old);
+                true
+            }
+            None => false,
+        };
         if slot == View::Mesh as usize {
             self.refined = 0;
         }
-        Ok(())
+        Ok(switched)
     }
 
     /// Records, into the current frame, the composed window image `window`: the mesh view (the
@@ -170,7 +175,8 @@ impl Renderer {
             return Err(Error::input("render", "a mesh view needs an environment and a mesh"));
         }
         let slot = settings.view as usize;
-        self.targets_for(slot, w, h)?;
+        let refined_before = self.refined;
+        let switched = self.targets_for(slot, w, h)?;
         let offset = if refine { self.refined } else { 0 };
         if refine && offset.saturating_add(settings.spp) > MAX_SPP {
             return Err(Error::input(
@@ -219,6 +225,13 @@ impl Renderer {
                 match &self.build_in_background {
                     Some(notify) => {
                         if !lobe.ready(&self.ctx, &variants, notify)? {
+                            // The view keeps showing what it showed: back to the targets it had.
+                            if switched {
+                                let shown = self.spare[slot].remove(0);
+                                let new = self.views[slot].replace(shown).expect("made above");
+                                self.spare[slot].insert(0, new);
+                                self.refined = refined_before;
+                            }
                             // New targets show black until the view is drawn (compose reads them).
                             let targets = self.views[slot].as_mut().expect("made above");
                             if !targets.drawn {
