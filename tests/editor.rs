@@ -297,9 +297,13 @@ fn state_handles_inputs_like_the_window() {
     let yaw = s.yaw;
     let (mx, my) = (s.layout.mesh_x as f64 + 50.0, 300.0);
     s.handle(Input::CursorMoved(mx, my));
+    assert!(!s.dragging());
     s.handle(Input::Button { pressed: true, right: false });
     s.handle(Input::CursorMoved(mx + 40.0, my));
+    // A held button: the editor keeps its previews until it is released (`preview::steps`).
+    assert!(s.dragging());
     s.handle(Input::Button { pressed: false, right: false });
+    assert!(!s.dragging());
     assert!(s.yaw != yaw);
     assert!(same_material(s.material(), &painted), "orbiting changed the material");
     s.handle(Input::Brush(BrushKind::Streak));

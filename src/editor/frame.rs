@@ -4,7 +4,7 @@
 //! settle), the tool panel, and the GPU frame that composes and presents it.
 
 use super::lighting::light_from;
-use super::preview::Preview;
+use super::preview::{self, CanvasStep, MeshStep, Preview};
 use super::state::Input;
 use super::stats::FrameKind;
 use super::view::{Plan, Shown};
@@ -97,27 +97,37 @@ impl App {
         let scale = if mesh_changed || canvas_changed { self.preview.scale() } else { 1.0 };
         let mesh_size = Preview::size((l.mesh_w, l.height), scale);
         let canvas_side = Preview::size((l.canvas, l.canvas), scale).0;
-        let (mesh, kind) = if mesh_changed {
-            let preview = crate::render::Settings { width: mesh_size.0, height: mesh_size.1, ..mesh_settings.clone() };
-            (Some((preview, Progress::Fresh)), FrameKind::Interaction)
-        } else if self.mesh_previewed {
-            (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Settle)
-        } else if refining && refined < REFINE_MAX {
-            // As many samples as the budget holds (`preview`), up to the step and the end.
-            let spp = self.preview.refine_step(REFINE_STEP.min(REFINE_MAX - refined));
-            let mis = crate::render::Settings { estimator: Estimator::Mis, spp, ..mesh_settings.clone() };
-            (Some((mis, Progress::Refine)), FrameKind::Refinement)
-        } else {
-            (None, FrameKind::Unchanged)
+        let (mesh_step, canvas_step) = preview::steps(preview::Situation {
+            mesh_changed,
+            canvas_changed,
+            mesh_previewed: self.mesh_previewed,
+            canvas_previewed: self.canvas_previewed,
+            holding: state.dragging(),
+            refine: refining && refined < REFINE_MAX,
+        });
+        let (mesh, kind) = match mesh_step {
+            MeshStep::Preview => {
+                let (width, height) = mesh_size;
+                let preview = crate::render::Settings { width, height, ..mesh_settings.clone() };
+                (Some((preview, Progress::Fresh)), FrameKind::Interaction)
+            }
+            MeshStep::Settle => (Some((mesh_settings.clone(), Progress::Fresh)), FrameKind::Settle),
+            MeshStep::Refine => {
+                // As many samples as the budget holds (`preview`), up to the step and the end.
+                let spp = self.preview.refine_step(REFINE_STEP.min(REFINE_MAX - refined));
+                let mis = crate::render::Settings { estimator: Estimator::Mis, spp, ..mesh_settings.clone() };
+                (Some((mis, Progress::Refine)), FrameKind::Refinement)
+            }
+            MeshStep::Keep => (None, FrameKind::Unchanged),
         };
-        let canvas = (canvas_changed || self.canvas_previewed).then(|| {
-            let side = if canvas_changed { canvas_side } else { l.canvas };
+        let canvas = (canvas_step != CanvasStep::Keep).then(|| {
+            let side = if canvas_step == CanvasStep::Preview { canvas_side } else { l.canvas };
             crate::render::Settings { width: side, height: side, view: View::Canvas, ..mesh_settings.clone() }
         });
         // What the mesh view shows (the panel's line); a frame that only settles the canvas is a
         // settle frame too (one that only previews it is not a frame of the mesh view's: unchanged).
         let mesh_kind = kind;
-        let canvas_settles = !canvas_changed && self.canvas_previewed;
+        let canvas_settles = canvas_step == CanvasStep::Settle;
         let kind = if kind == FrameKind::Unchanged && canvas_settles { FrameKind::Settle } else { kind };
         let mesh_previewed = mesh_changed && mesh_size != (l.mesh_w, l.height);
         let canvas_previewed = canvas_changed && canvas_side != l.canvas;

@@ -177,9 +177,12 @@ impl ApplicationHandler for App {
             return;
         }
         // Idle: first render the previewed views at full size (a light dragged on a refined view
-        // previews the canvas alone, and nothing else would ask for that frame).
+        // previews the canvas alone, and nothing else would ask for that frame) — once no button is
+        // held: a pause in a drag waits for the next event (`preview::steps`).
         if self.shown && (self.mesh_previewed || self.canvas_previewed) {
-            self.request_redraw();
+            if !self.state.as_ref().is_some_and(|s| s.dragging()) {
+                self.request_redraw();
+            }
             return;
         }
         // Then refine the mesh view (not while replaying for a screenshot, which shows the fast

@@ -112,6 +112,68 @@ fn medians(seen: &VecDeque<(f64, f64)>) -> (f64, f64) {
     (crate::measure::stats(&a).0, crate::measure::stats(&b).0)
 }
 
+/// What a frame does with the mesh view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshStep {
+    /// It changed: render it at the preview's scale.
+    Preview,
+    /// It shows a preview and nothing changed: render it at full size.
+    Settle,
+    /// It is settled and not fully refined: add samples.
+    Refine,
+    /// Show what it shows.
+    Keep,
+}
+
+/// What a frame does with the canvas.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CanvasStep {
+    Preview,
+    Settle,
+    Keep,
+}
+
+/// What changed and what is shown, for [`steps`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Situation {
+    pub mesh_changed: bool,
+    pub canvas_changed: bool,
+    /// The views show previews.
+    pub mesh_previewed: bool,
+    pub canvas_previewed: bool,
+    /// A mouse button is held (a stroke, an orbit or a light being dragged): a pause in the drag is
+    /// not the end of it, so previews are not settled and refinement does not start over them.
+    pub holding: bool,
+    /// The mesh view should refine (idle, refinement on, not done).
+    pub refine: bool,
+}
+
+/// What a frame does with each view: a change previews the view; a previewed view settles at full
+/// size once nothing changes and no button is held; a settled mesh view refines.
+pub fn steps(s: Situation) -> (MeshStep, CanvasStep) {
+    let mesh = if s.mesh_changed {
+        MeshStep::Preview
+    } else if s.mesh_previewed {
+        if s.holding {
+            MeshStep::Keep
+        } else {
+            MeshStep::Settle
+        }
+    } else if s.refine {
+        MeshStep::Refine
+    } else {
+        MeshStep::Keep
+    };
+    let canvas = if s.canvas_changed {
+        CanvasStep::Preview
+    } else if s.canvas_previewed && !s.holding {
+        CanvasStep::Settle
+    } else {
+        CanvasStep::Keep
+    };
+    (mesh, canvas)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -195,6 +257,27 @@ mod tests {
         assert_eq!(z.refine_step(16), 1);
         z.observe_refinement(10.0, 0.0, 16);
         assert_eq!(z.refine_step(16), 16);
+    }
+
+    #[test]
+    fn previews_settle_once_nothing_changes_and_no_button_is_held() {
+        let base = Situation { refine: true, ..Situation::default() };
+        // A change previews; the frame after settles; then refinement.
+        let change = Situation { mesh_changed: true, canvas_changed: true, ..base };
+        assert_eq!(steps(change), (MeshStep::Preview, CanvasStep::Preview));
+        let idle = Situation { mesh_previewed: true, canvas_previewed: true, ..base };
+        assert_eq!(steps(idle), (MeshStep::Settle, CanvasStep::Settle));
+        assert_eq!(steps(base), (MeshStep::Refine, CanvasStep::Keep));
+        // A pause in a drag keeps the previews and does not refine over them.
+        assert_eq!(steps(Situation { holding: true, ..idle }), (MeshStep::Keep, CanvasStep::Keep));
+        // A held button over a settled view (a stroke is applied on release) lets it refine.
+        assert_eq!(steps(Situation { holding: true, ..base }), (MeshStep::Refine, CanvasStep::Keep));
+        // A light drag: the canvas changes and previews while the mesh view settles or refines.
+        let light = Situation { canvas_changed: true, mesh_previewed: true, ..base };
+        assert_eq!(steps(light), (MeshStep::Settle, CanvasStep::Preview));
+        assert_eq!(steps(Situation { holding: true, ..light }), (MeshStep::Keep, CanvasStep::Preview));
+        // Without refinement a settled view stays.
+        assert_eq!(steps(Situation { refine: false, ..base }), (MeshStep::Keep, CanvasStep::Keep));
     }
 
     #[test]

@@ -147,6 +147,11 @@ pub struct State {
 }
 
 impl State {
+    /// A mouse button is held over a view (a stroke, an orbit or the canvas light being dragged).
+    pub fn dragging(&self) -> bool {
+        !matches!(self.drag, Drag::None)
+    }
+
     pub fn new(material: Material, settings: Settings, layout: Layout) -> State {
         let default_light = settings.canvas.light;
         State {
