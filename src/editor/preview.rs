@@ -57,14 +57,10 @@ impl Preview {
     /// A finished frame whose views were rendered at `scale`: its wall time and the GPU time of its
     /// passes that scale with the views' pixels (ms). Chooses the next interaction frame's scale.
     pub fn observe(&mut self, scale: f64, wall_ms: f64, scaled_ms: f64) {
-        let usable = |v: f64| v.is_finite() && v >= 0.0;
         if self.budget_ms <= 0.0 || !(scale > 0.0) || !usable(wall_ms) || !usable(scaled_ms) {
             return;
         }
-        self.seen.push_back(((wall_ms - scaled_ms).max(0.0), scaled_ms / (scale * scale)));
-        while self.seen.len() > WINDOW {
-            self.seen.pop_front();
-        }
+        remember(&mut self.seen, ((wall_ms - scaled_ms).max(0.0), scaled_ms / (scale * scale)));
         let (fixed, full) = medians(&self.seen);
         let predicted = |level: usize| fixed + full * LEVELS[level] * LEVELS[level];
         let fits =
@@ -75,14 +71,10 @@ impl Preview {
     /// A finished refinement frame: its wall time, its sampling pass's GPU time and the samples it
     /// added. Sets what [`Preview::refine_step`] answers.
     pub fn observe_refinement(&mut self, wall_ms: f64, sampling_ms: f64, samples: u32) {
-        let usable = |v: f64| v.is_finite() && v >= 0.0;
         if self.budget_ms <= 0.0 || samples == 0 || !usable(wall_ms) || !usable(sampling_ms) {
             return;
         }
-        self.refined.push_back(((wall_ms - sampling_ms).max(0.0), sampling_ms / samples as f64));
-        while self.refined.len() > WINDOW {
-            self.refined.pop_front();
-        }
+        remember(&mut self.refined, ((wall_ms - sampling_ms).max(0.0), sampling_ms / samples as f64));
     }
 
     /// The samples the next refinement frame adds, at most `most` (≥ 1): as many as the budget
@@ -102,6 +94,19 @@ impl Preview {
             return 1;
         }
         fit.clamp(1.0, most as f64) as u32
+    }
+}
+
+/// A time a model can learn from: a finite number of milliseconds, not negative.
+fn usable(ms: f64) -> bool {
+    ms.is_finite() && ms >= 0.0
+}
+
+/// Adds an observation, keeping the last [`WINDOW`].
+fn remember(seen: &mut VecDeque<(f64, f64)>, observation: (f64, f64)) {
+    seen.push_back(observation);
+    while seen.len() > WINDOW {
+        seen.pop_front();
     }
 }
 
