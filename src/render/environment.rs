@@ -152,6 +152,8 @@ impl KeyLightSummary {
             "threshold": self.threshold,
             "threshold_over_mean": crate::scene::keylight::THRESHOLD_OVER_MEAN,
             "quadrature_ratio": crate::scene::keylight::QUADRATURE_RATIO,
+            "tiles_min_alpha": self.tiles_min_alpha(),
+            "tiles_max_points": crate::scene::keylight::tiles::MAX_TILE_POINTS,
             "share": self.share,
             "lights": self.lights.iter().map(light_json).collect::<Vec<_>>(),
             "wide": {
@@ -170,6 +172,13 @@ impl KeyLightSummary {
         (!self.wide.is_empty()).then(|| spread / crate::scene::keylight::QUADRATURE_RATIO)
     }
 
+    /// The smallest `min(αx, αy)` of a lobe that sees the key lights as tiles
+    /// (`keylight::tiles`, at most `MAX_TILE_POINTS` points), to 1 %; `None` without lights.
+    pub fn tiles_min_alpha(&self) -> Option<f64> {
+        use crate::scene::keylight::tiles::{narrowest_alpha, MAX_TILE_POINTS};
+        narrowest_alpha(&self.lights, MAX_TILE_POINTS)
+    }
+
     /// One line: how many lights, their share of the energy, the threshold, and each light's radius and
     /// direction (or why there is none).
     pub fn describe(&self) -> String {
@@ -184,12 +193,19 @@ impl KeyLightSummary {
         let each: Vec<String> = self.lights.iter().map(describe_light).collect();
         let spread = self.lights.iter().map(|l| l.spread).fold(0.0, f64::max);
         let mut line = format!(
-            "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}; lobes with min(αx, αy) ≥ {:.4} (the largest spread ≤ {QUADRATURE_RATIO} α) see them as 4 quadrature points each, the others by MIS",
+            "{} key light(s) carrying {:.1} % of the energy (threshold {THRESHOLD_OVER_MEAN} × the mean radiance = {:.4}): {}; lobes with min(αx, αy) ≥ {:.4} (the largest spread ≤ {QUADRATURE_RATIO} α) see them as 4 quadrature points each, {}",
             self.lights.len(),
             self.share * 100.0,
             self.threshold,
             each.join("; "),
-            spread / QUADRATURE_RATIO
+            spread / QUADRATURE_RATIO,
+            match self.tiles_min_alpha() {
+                Some(a) => format!(
+                    "those with min(αx, αy) ≥ {a:.4} as tiles of 4 points each (at most {} points), the others by MIS",
+                    crate::scene::keylight::tiles::MAX_TILE_POINTS
+                ),
+                None => "the others by MIS".to_string(),
+            }
         );
         if let Some(alpha) = self.wide_min_alpha() {
             let each: Vec<String> = self.wide.iter().map(describe_light).collect();

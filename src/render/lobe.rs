@@ -161,10 +161,21 @@ pub struct Job<'a> {
     pub seed: u32,
     pub material: &'a Buffer,
     pub halton: &'a Buffer,
-    /// The frame's light samples, how many, and the sample counts of the bright and dark sets (for a
-    /// `points` variant: the lights' points, how many, and zeros).
-    pub light_samples: Option<(&'a Buffer, u32, [f32; 2])>,
+    pub light_samples: Option<LightSet<'a>>,
     pub into: Into,
+}
+
+/// The light set a lobe pass reads: the frame's light samples, or for a `points` variant the
+/// lights' points (or their tiles', `keylight::tiles`).
+#[derive(Clone, Copy)]
+pub struct LightSet<'a> {
+    /// The uniform block is `gpu::LIGHT_SET_UNIFORM_BYTES` of this buffer from `offset`.
+    pub buffer: &'a Buffer,
+    pub offset: u64,
+    /// How many samples or points it holds.
+    pub count: u32,
+    /// The sample counts of the bright and dark sets (zeros for points).
+    pub counts: [f32; 2],
 }
 
 /// Where a lobe pass adds its estimate.
@@ -314,7 +325,9 @@ impl LobePass {
         // Stand-ins where the variant reads no key lights (the layout is the same for every variant).
         let (cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
         // The material's uniform buffer stands in (it is longer than the light set's block).
-        let (samples_buf, m, counts) = light_samples.filter(|_| variant.lights).unwrap_or((material, 0, [0.0; 2]));
+        let LightSet { buffer: samples_buf, offset, count: m, counts } = light_samples
+            .filter(|_| variant.lights)
+            .unwrap_or(LightSet { buffer: material, offset: 0, count: 0, counts: [0.0; 2] });
         let residual = match (variant.key, keys.and_then(|k| k.wide.as_ref()).filter(|_| variant.wide)) {
             (true, Some(w)) => &w.residual,
             (true, None) if variant.wide => {
@@ -335,7 +348,7 @@ impl LobePass {
                 Binding::Storage(halton),
                 Binding::Sampled(texels.view, env.sampler),
                 Binding::Storage(cones),
-                Binding::Uniform(samples_buf, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
+                Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
                 Binding::Storage(&t.pixels),
                 // A filtered pass's light term (read only by those).
                 Binding::StorageImage(t.accum.view),

@@ -54,7 +54,7 @@ impl MisPass {
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
                 Binding::Sampled(env.texture.view, env.sampler),
-                Binding::Uniform(material, super::gpu::MATERIAL_UNIFORM_BYTES as u64),
+                Binding::Uniform(material, 0, super::gpu::MATERIAL_UNIFORM_BYTES as u64),
                 Binding::Storage(sequence),
                 Binding::Storage(&env.marginal),
                 Binding::Storage(&env.conditional),

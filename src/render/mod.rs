@@ -109,6 +109,9 @@ pub struct Renderer {
     /// lights off their residual map (`keylight::WideLights`); false leaves them in it (a test
     /// compares the two).
     pub wide_lights: bool,
+    /// Let the `key` lobe passes of lobes too narrow for the lights' own points see them as tiles
+    /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
+    pub light_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
     /// false leaves them unfiltered (a test compares the two).
     pub denoise: bool,
@@ -158,6 +161,7 @@ impl Renderer {
             cull_hidden_faces: true,
             light_reach_test: true,
             wide_lights: true,
+            light_tiles: true,
             denoise: true,
             seed: 0,
             build_in_background: None,

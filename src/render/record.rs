@@ -13,6 +13,7 @@ use super::{
 };
 use crate::brdf::Material;
 use crate::error::{Error, Result};
+use crate::scene::keylight::tiles::{tile_points, MAX_TILE_POINTS};
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
@@ -189,6 +190,8 @@ impl Renderer {
         let key = settings.estimator == Estimator::Key;
         let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
         let lights = key_lights.is_some();
+        // A lobe too narrow for the lights' own points sees them as tiles where those fit.
+        let mut tiles: Vec<(u32, Vec<[f32; 8]>)> = Vec::new();
         let lobes: Vec<(u32, lobe::Variant)> = material
             .lobes
             .iter()
@@ -198,7 +201,14 @@ impl Renderer {
                 let fits = |lights: &[crate::scene::keylight::KeyLight]| {
                     crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
                 };
-                let points = key_lights.is_some_and(|k| fits(&k.lights));
+                let whole = key_lights.is_some_and(|k| fits(&k.lights));
+                let tiled = match key_lights.filter(|_| !whole && self.light_tiles) {
+                    Some(k) => tile_points(&k.lights, l.alpha_x.min(l.alpha_y), MAX_TILE_POINTS)
+                        .map(|rows| tiles.push((i as u32, rows)))
+                        .is_some(),
+                    None => false,
+                };
+                let points = whole || tiled;
                 // A lobe that sees the wide lights as points too takes them off its residual.
                 let wide = self.wide_lights
                     && points
@@ -211,7 +221,10 @@ impl Renderer {
                         lights,
                         points,
                         wide,
-                        reach: self.light_reach_test && lights && !points && lobe::reach_test_pays(material, l),
+                        reach: self.light_reach_test
+                            && lights
+                            && (!points || tiled)
+                            && lobe::reach_test_pays(material, l),
                         ..lobe::Variant::of(material, l, prefilter)
                     },
                 )
@@ -256,14 +269,25 @@ impl Renderer {
             ring.current().upload(ctx, "keylights.frame", &gpu::light_set_bytes(&samples))?;
             light_counts = Some((samples.len() as u32, [m as f32, keys.sampling.dark_samples(m) as f32]));
         }
+        if mesh_view && !tiles.is_empty() {
+            let bytes: Vec<u8> = tiles.iter().flat_map(|(_, rows)| gpu::light_set_bytes(rows)).collect();
+            ring.current().upload(ctx, "keylights.tiles", &bytes)?;
+        }
         let frame = ring.current();
         let (cmd, pool) = (frame.cmd, frame.pool);
         let (ts, buffers) = frame.parts();
         let material_buf = buffers.get("material").expect("written by begin_frame");
-        let light_samples = light_counts.map(|(n, c)| (buffers.get("keylights.frame").expect("written above"), n, c));
+        let set = |buffer, offset, count, counts| lobe::LightSet { buffer, offset, count, counts };
+        let light_samples =
+            light_counts.map(|(n, c)| set(buffers.get("keylights.frame").expect("written above"), 0, n, c));
         let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
-        let light_points = key_lights.map(|k| (&k.points, 4 * k.lights.len() as u32, [0.0; 2]));
-        let wide_points = key_lights.and_then(|k| k.wide.as_ref()).map(|w| (&w.points, w.count, [0.0; 2]));
+        let light_points = key_lights.map(|k| set(&k.points, 0, 4 * k.lights.len() as u32, [0.0; 2]));
+        let wide_points = key_lights.and_then(|k| k.wide.as_ref()).map(|w| set(&w.points, 0, w.count, [0.0; 2]));
+        let tile_set = |lobe: u32| {
+            let at = tiles.iter().position(|t| t.0 == lobe)?;
+            let buffer = buffers.get("keylights.tiles").expect("written above");
+            Some(set(buffer, (at * gpu::LIGHT_SET_UNIFORM_BYTES) as u64, tiles[at].1.len() as u32, [0.0; 2]))
+        };
         let passes = self.passes.as_ref().expect("passes live until drop");
         // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
         // the farthest point of the frustum in front of the near plane.
@@ -334,7 +358,10 @@ impl Renderer {
                 }
                 for (&(i, v), &f) in lobes.iter().zip(&filtered) {
                     let into = if f { lobe::Into::Rough } else { lobe::Into::Accum };
-                    let name = format!("lobe{i}[{}]", v.tag());
+                    let name = match tiles.iter().find(|t| t.0 == i) {
+                        Some((_, rows)) => format!("lobe{i}[{},tiles {}]", v.tag(), rows.len()),
+                        None => format!("lobe{i}[{}]", v.tag()),
+                    };
                     ts.time(ctx, cmd, &name, || {
                         let job = lobe::Job {
                             index: i,
@@ -344,7 +371,7 @@ impl Renderer {
                             halton,
                             light_samples: match (v.points, v.wide) {
                                 (true, true) => wide_points,
-                                (true, false) => light_points,
+                                (true, false) => tile_set(i).or(light_points),
                                 (false, _) => light_samples,
                             },
                             into,

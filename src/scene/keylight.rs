@@ -22,6 +22,8 @@ use glam::DVec3;
 
 use super::env::Environment;
 
+pub mod tiles;
+
 /// A texel belongs to a light where its luminance exceeds this multiple of the map's mean
 /// (solid-angle-weighted) luminance. A clear-sky sun is 10³–10⁴ times the mean; bright windows and
 /// overcast skies are 3–10 times it.
@@ -95,6 +97,8 @@ pub struct KeyLight {
     /// radians (`(3 Σ|w| r⁴ / Σ w)^¼`, `w` the signed luminance weights: ringing of either sign widens
     /// it): a lobe much wider than this sees the light as its four `points`.
     pub spread: f64,
+    /// The replaced texels, for lobes narrower than the light ([`tiles`]).
+    pub region: Vec<tiles::LightTexel>,
 }
 
 /// The quadrature of a light's texels: `(direction, signed luminance weight, texel solid angle)`.
@@ -102,7 +106,7 @@ pub struct KeyLight {
 /// principal axes give the points `m ± √(2λ₁) e₁`, `m ± √(2λ₂) e₂` (each weight ¼ matches the mean and
 /// the covariance), and the light's spread (see [`KeyLight::spread`]). A net weight ≤ 0 or a
 /// degenerate frame gives `fallback` four times and an infinite spread (no lobe fits).
-fn quadrature(texels: &[(DVec3, f64, f64)], fallback: DVec3) -> ([DVec3; 4], f64) {
+pub(crate) fn quadrature(texels: &[(DVec3, f64, f64)], fallback: DVec3) -> ([DVec3; 4], f64) {
     let total: f64 = texels.iter().map(|t| t.1).sum();
     let mean = texels.iter().fold(DVec3::ZERO, |a, t| a + t.1 * t.0);
     let m = match crate::brdf::material::unit(mean) {
@@ -405,6 +409,7 @@ fn find_lights(
         let (mut power, mut centroid, mut solid_angle) = ([0.0f64; 3], DVec3::ZERO, 0.0);
         let mut centres = Vec::with_capacity(region.len());
         let mut weighted = Vec::with_capacity(region.len());
+        let mut texels = Vec::with_capacity(region.len());
         for &k in &region {
             let (i, j) = (k % w, k / w);
             let t = env.texels[k];
@@ -416,6 +421,12 @@ fn find_lights(
             solid_angle += d_omega[j];
             centres.push((j, texel_direction(i, j, w, h)));
             weighted.push((texel_direction(i, j, w, h), (lum[k] - bg_lum) * d_omega[j], d_omega[j]));
+            texels.push(tiles::LightTexel {
+                direction: texel_direction(i, j, w, h),
+                weight: (lum[k] - bg_lum) * d_omega[j],
+                solid_angle: d_omega[j],
+                power: [0, 1, 2].map(|c| (t[c] as f64 - background[c] as f64) * d_omega[j]),
+            });
         }
         let Some(direction) = crate::brdf::material::unit(centroid) else { continue };
         // Half a texel's diagonal: the row's width in u (narrower near the poles) and the height in v.
@@ -441,6 +452,7 @@ fn find_lights(
             extent,
             points,
             spread,
+            region: texels,
         };
         candidates.push((light, region, background));
     }

@@ -67,8 +67,9 @@ pub fn allocate(ctx: &Context, pool: vk::DescriptorPool, layout: vk::DescriptorS
 /// What one binding points at.
 pub enum Binding<'a> {
     Storage(&'a Buffer),
-    /// A uniform buffer's first `range` bytes (at most the device's `maxUniformBufferRange`).
-    Uniform(&'a Buffer, u64),
+    /// `range` bytes of a uniform buffer from `offset` (a multiple of the device's
+    /// `minUniformBufferOffsetAlignment`; `range` at most its `maxUniformBufferRange`).
+    Uniform(&'a Buffer, u64, u64),
     StorageImage(vk::ImageView),
     Sampled(vk::ImageView, vk::Sampler),
 }
@@ -79,7 +80,7 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
         .iter()
         .map(|b| match b {
             Binding::Storage(buf) => [buf.descriptor()],
-            Binding::Uniform(buf, range) => [buf.descriptor().range(*range)],
+            Binding::Uniform(buf, offset, range) => [buf.descriptor().offset(*offset).range(*range)],
             _ => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
