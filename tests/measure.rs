@@ -119,7 +119,9 @@ fn error_vs_time_quick_trends() {
         }
     }
     // The default `key` estimator beats the paper's at equal samples, at 8 and at the most, on every
-    // scene; and the paper's `fis` is unchanged: lavapipe renders it deterministically, and its
+    // scene, and at 8 spp it is within issue 10's 8 % on every scene (studio's medium lobe was 0.116
+    // by MIS light samples, 0.045 as tiles; the largest left is studio's sharp lobe, 0.068); and the
+    // paper's `fis` is unchanged: lavapipe renders it deterministically, and its
     // errors at 8 spp are the ones measured before `key` existed (to 1e-3 relative: a different LLVM
     // may reorder f32 arithmetic, a changed estimator moves them by far more).
     for env in &plan.envs {
@@ -129,6 +131,8 @@ fn error_vs_time_quick_trends() {
                 eprintln!("{env} {mat} {spp} spp: key {k:.4}, fis {f:.4}");
                 assert!(k < f, "{env} {mat}: key {k} not below fis {f} at {spp} spp");
             }
+            let k8 = err(env, mat, Estimator::Key, 8);
+            assert!(k8 <= 0.08, "{env} {mat}: key at 8 spp {k8}, over issue 10's 8 %");
         }
     }
     for (env, mat, want) in FIS_AT_8 {
