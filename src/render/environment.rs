@@ -154,6 +154,7 @@ impl KeyLightSummary {
             "quadrature_ratio": crate::scene::keylight::QUADRATURE_RATIO,
             "tiles_min_alpha": self.tiles_min_alpha(),
             "tiles_max_points": crate::scene::keylight::tiles::MAX_TILE_POINTS,
+            "tiles_max_points_with_reach": crate::scene::keylight::tiles::MAX_BLOCK_POINTS,
             "share": self.share,
             "lights": self.lights.iter().map(light_json).collect::<Vec<_>>(),
             "wide": {
@@ -172,11 +173,16 @@ impl KeyLightSummary {
         (!self.wide.is_empty()).then(|| spread / crate::scene::keylight::QUADRATURE_RATIO)
     }
 
-    /// The smallest `min(αx, αy)` of a lobe that sees the key lights as tiles
-    /// (`keylight::tiles`, at most `MAX_TILE_POINTS` points), to 1 %; `None` without lights.
+    /// The smallest `α` of an isotropic lobe of one component that sees the key lights as tiles
+    /// (`keylight::tiles`, within `tiles::max_points`, with the reach test where it pays), to 1 %;
+    /// `None` without lights.
     pub fn tiles_min_alpha(&self) -> Option<f64> {
-        use crate::scene::keylight::tiles::{narrowest_alpha, MAX_TILE_POINTS};
-        narrowest_alpha(&self.lights, MAX_TILE_POINTS)
+        use crate::scene::keylight::tiles::{max_points, narrowest_alpha};
+        narrowest_alpha(&self.lights, |a| {
+            let lobe = crate::brdf::Lobe::isotropic([1.0; 3], a);
+            let reach = super::lobe::reach_angle(&lobe);
+            max_points(&self.lights, (reach.to_degrees() <= super::lobe::REACH_TEST_MAX_DEG).then_some(reach))
+        })
     }
 
     /// One line: how many lights, their share of the energy, the threshold, and each light's radius and
@@ -201,8 +207,9 @@ impl KeyLightSummary {
             spread / QUADRATURE_RATIO,
             match self.tiles_min_alpha() {
                 Some(a) => format!(
-                    "those with min(αx, αy) ≥ {a:.4} as tiles of 4 points each (at most {} points), the others by MIS",
-                    crate::scene::keylight::tiles::MAX_TILE_POINTS
+                    "those with min(αx, αy) ≥ {a:.4} (isotropic) as tiles of 4 points each (at most {} points, up to {} where a narrow lobe tests its reach), the others by MIS",
+                    crate::scene::keylight::tiles::MAX_TILE_POINTS,
+                    crate::scene::keylight::tiles::MAX_BLOCK_POINTS
                 ),
                 None => "the others by MIS".to_string(),
             }

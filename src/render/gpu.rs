@@ -148,6 +148,7 @@ pub fn vec4(v: DVec3, w: f32) -> [f32; 4] {
 pub const LIGHT_SET_UNIFORM_BYTES: usize = 16384;
 /// The most light samples or points the block holds.
 pub const LIGHT_SET_MAX: usize = LIGHT_SET_UNIFORM_BYTES / 32;
+const _: () = assert!(LIGHT_SET_MAX == crate::scene::keylight::tiles::MAX_BLOCK_POINTS);
 
 /// `rows` (two `vec4` each) padded with zeros to the light set's uniform block.
 pub fn light_set_bytes(rows: &[[f32; 8]]) -> Vec<u8> {

@@ -78,8 +78,12 @@ pub const REACH_TEST_MAX_DEG: f64 = 60.0;
 /// [`REACH_TEST_MAX_DEG`].
 pub fn reach_test_pays(material: &Material, lobe: &Lobe) -> bool {
     let v = Variant::of(material, lobe, true);
-    let reach = 2.0 * (REACH * lobe.alpha_x.max(lobe.alpha_y)).atan();
-    !(v.split || v.sym || v.facet) && reach.to_degrees() <= REACH_TEST_MAX_DEG
+    !(v.split || v.sym || v.facet) && reach_angle(lobe).to_degrees() <= REACH_TEST_MAX_DEG
+}
+
+/// How far from its mirror direction `lobe` reaches, in radians: `2 atan(REACH α_max)`.
+pub fn reach_angle(lobe: &Lobe) -> f64 {
+    2.0 * (REACH * lobe.alpha_x.max(lobe.alpha_y)).atan()
 }
 
 /// The lod bias of the `key` estimator's residual passes, in place of the paper's `+1`: 0 makes a

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::brdf::Material;
 use crate::error::{Error, Result};
-use crate::scene::keylight::tiles::{tile_points, MAX_TILE_POINTS};
+use crate::scene::keylight::tiles::{max_points, tile_points};
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
@@ -202,8 +202,13 @@ impl Renderer {
                     crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
                 };
                 let whole = key_lights.is_some_and(|k| fits(&k.lights));
+                // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
+                // tiles with the test off give the same image (a test compares).
+                let pays = lights && lobe::reach_test_pays(material, l);
+                let reach = pays.then(|| lobe::reach_angle(l));
+                let reach_test = self.light_reach_test && pays;
                 let tiled = match key_lights.filter(|_| !whole && self.light_tiles) {
-                    Some(k) => tile_points(&k.lights, l.alpha_x.min(l.alpha_y), MAX_TILE_POINTS)
+                    Some(k) => tile_points(&k.lights, l.alpha_x.min(l.alpha_y), max_points(&k.lights, reach))
                         .map(|rows| tiles.push((i as u32, rows)))
                         .is_some(),
                     None => false,
@@ -221,10 +226,7 @@ impl Renderer {
                         lights,
                         points,
                         wide,
-                        reach: self.light_reach_test
-                            && lights
-                            && (!points || tiled)
-                            && lobe::reach_test_pays(material, l),
+                        reach: reach_test && (!points || tiled),
                         ..lobe::Variant::of(material, l, prefilter)
                     },
                 )

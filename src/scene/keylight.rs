@@ -422,6 +422,8 @@ fn find_lights(
             centres.push((j, texel_direction(i, j, w, h)));
             weighted.push((texel_direction(i, j, w, h), (lum[k] - bg_lum) * d_omega[j], d_omega[j]));
             texels.push(tiles::LightTexel {
+                uv: [(i as f64 + 0.5) / w as f64, (j as f64 + 0.5) / h as f64],
+                size: [1.0 / w as f64, 1.0 / h as f64],
                 direction: texel_direction(i, j, w, h),
                 weight: (lum[k] - bg_lum) * d_omega[j],
                 solid_angle: d_omega[j],

@@ -13,15 +13,16 @@
 //! tiles of a light keep the same bound when their moments add up to no more: `Σ_t |W_t| s_t⁴ ≤
 //! |W| (r α)⁴`. The tile with the largest moment is split (at the middle of its longer side, in the
 //! plane tangent at the light) until the sum fits. A tile whose signs cancel (net weight under half
-//! its `Σ|w|`) has points far off its texels and is always split; a single texel cannot be split, so
-//! a lobe narrower than the texels gets no tiles (`None`: it keeps MIS). `tests/keylight.rs` checks
-//! the bias against the exact sum over the texels.
+//! its `Σ|w|`) has points far off its texels and is always split; a tile of a single texel is cut into
+//! its quarters (the map is read texel by texel: the radiance is constant over a texel). A lobe whose
+//! tiles would take more points than it may ([`max_points`]) gets none (`None`: it keeps MIS).
+//! `tests/keylight.rs` checks the bias against the exact integral over the texels.
 //!
 //! Pure CPU, a few microseconds per lobe: made per frame, not cached.
 
 use glam::DVec3;
 
-use super::{quadrature, KeyLight, QUADRATURE_RATIO};
+use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 
 /// The most points a lobe's tiles may take: the lobe pass evaluates every point at every pixel (in
 /// the light's reach), about a seventh of a BRDF sample's cost each on lavapipe (512², studio: an
@@ -30,14 +31,39 @@ use super::{quadrature, KeyLight, QUADRATURE_RATIO};
 /// 512, `render::gpu`).
 pub const MAX_TILE_POINTS: usize = 64;
 
+/// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`).
+pub const MAX_BLOCK_POINTS: usize = 512;
+
+/// The most points a lobe's tiles may take. Without the per-pixel reach test every shaded pixel
+/// evaluates them all: [`MAX_TILE_POINTS`]. A lobe whose pass skips the pixels out of the lights'
+/// reach (`reach`: the angle `2 atan(5 α_max)` of `render::lobe::reach_test_pays`, radians) evaluates
+/// them only where its mirror direction comes within `reach + extent` of a light: on a sphere at most a
+/// share `2 (1 − cos((reach + extent)/2))` of the pixels (normals within half that angle of the
+/// light's half vector, weighted by `n·v` over the visible hemisphere). Twice that share (vectors of 8
+/// pixels straddle its edge) times the points stays within `MAX_TILE_POINTS`, up to the block's
+/// [`MAX_BLOCK_POINTS`].
+pub fn max_points(lights: &[KeyLight], reach: Option<f64>) -> usize {
+    let Some(reach) = reach else { return MAX_TILE_POINTS };
+    let half = |l: &KeyLight| (0.5 * (reach + l.extent)).min(std::f64::consts::FRAC_PI_2);
+    let share: f64 = lights.iter().map(|l| 4.0 * (1.0 - half(l).cos())).sum::<f64>().min(1.0);
+    if !(share > 0.0) {
+        return MAX_BLOCK_POINTS;
+    }
+    ((MAX_TILE_POINTS as f64 / share) as usize).clamp(MAX_TILE_POINTS, MAX_BLOCK_POINTS)
+}
+
 /// The tiles' moments sum to at most this share of the whole light's bound: the errors of tiles add
 /// in magnitude where the four points of one region partly cancel theirs (the bound as it stands,
 /// share 1, measured up to 1.2 % of the largest value on sky and studio; `tests/keylight.rs`).
 pub const TILE_BUDGET: f64 = 0.5;
 
-/// One texel of a light, as the tiles need it.
+/// One texel of a light (or a part of one, see [`quarters`]), as the tiles need it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightTexel {
+    /// Its centre in the map's `(u, v)`.
+    pub uv: [f64; 2],
+    /// Its size in `(u, v)`: `(1/W, 1/H)` for a whole texel.
+    pub size: [f64; 2],
     /// Its centre's direction.
     pub direction: DVec3,
     /// `(luminance − background's) dω`, of either sign.
@@ -77,10 +103,43 @@ fn tile(region: &[LightTexel], texels: Vec<usize>) -> Tile {
     Tile { texels, points, power, moment }
 }
 
-/// Splits `t` in two at the middle of its longer side in the plane `(e1, e2)`; `None` for one texel.
-fn split(region: &[LightTexel], t: &Tile, e1: DVec3, e2: DVec3) -> Option<(Tile, Tile)> {
-    if t.texels.len() < 2 {
-        return None;
+/// A texel's four quarters in `(u, v)`, each with the part of its solid angle, weight and power
+/// that its `sin θ` gives it (the map is read texel by texel, nearest: the radiance is the same over
+/// the texel). A texel is split only for a lobe narrower than it, where its own extent is what the
+/// four points of one texel cannot follow.
+fn quarters(t: &LightTexel) -> [LightTexel; 4] {
+    let offsets = [[-0.25, -0.25], [0.25, -0.25], [-0.25, 0.25], [0.25, 0.25]];
+    let uv = offsets.map(|o| [t.uv[0] + o[0] * t.size[0], t.uv[1] + o[1] * t.size[1]]);
+    let sin = uv.map(|p| (std::f64::consts::PI * p[1]).sin().max(0.0));
+    let total: f64 = sin.iter().sum();
+    let mut out = [*t; 4];
+    for (k, q) in out.iter_mut().enumerate() {
+        let share = if total > 0.0 { sin[k] / total } else { 0.25 };
+        *q = LightTexel {
+            uv: uv[k],
+            size: [0.5 * t.size[0], 0.5 * t.size[1]],
+            direction: Environment::direction(uv[k][0], uv[k][1]),
+            weight: t.weight * share,
+            solid_angle: t.solid_angle * share,
+            power: t.power.map(|c| c * share),
+        };
+    }
+    out
+}
+
+/// Splits `t` in two at the middle of its longer side in the plane `(e1, e2)`; a tile of one texel
+/// (or part of one) is first cut into its [`quarters`], appended to `region`.
+fn split(region: &mut Vec<LightTexel>, t: &Tile, e1: DVec3, e2: DVec3) -> Option<(Tile, Tile)> {
+    if t.texels.len() == 1 {
+        let parts = quarters(&region[t.texels[0]]);
+        let first = region.len();
+        region.extend(parts);
+        // The two halves across the longer side (in angle: u spans 2π sin θ, v spans π).
+        let p = &region[t.texels[0]];
+        let wide = 2.0 * p.size[0] * (std::f64::consts::PI * p.uv[1]).sin() >= p.size[1];
+        let (a, b) = if wide { ([0, 2], [1, 3]) } else { ([0, 1], [2, 3]) };
+        let region = &*region;
+        return Some((tile(region, a.map(|k| first + k).to_vec()), tile(region, b.map(|k| first + k).to_vec())));
     }
     let at = |k: usize| (region[k].direction.dot(e1), region[k].direction.dot(e2));
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -104,11 +163,11 @@ fn split(region: &[LightTexel], t: &Tile, e1: DVec3, e2: DVec3) -> Option<(Tile,
 /// The tiles of `light` for a lobe of smaller roughness `alpha`, at most `max_tiles` of them, or
 /// `None` when they do not fit.
 fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Tile>> {
-    let region = &light.region;
+    let mut region = light.region.clone();
     if region.is_empty() {
         return None;
     }
-    let whole = tile(region, (0..region.len()).collect());
+    let whole = tile(&region, (0..region.len()).collect());
     let net: f64 = region.iter().map(|t| t.weight).sum();
     let budget = TILE_BUDGET * net.abs() * (QUADRATURE_RATIO * alpha).powi(4);
     let e1 = light.direction.any_orthonormal_vector();
@@ -123,7 +182,7 @@ fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Til
             return None;
         }
         let worst = (0..tiles.len()).max_by(|&a, &b| tiles[a].moment.total_cmp(&tiles[b].moment))?;
-        let (a, b) = split(region, &tiles[worst], e1, e2)?;
+        let (a, b) = split(&mut region, &tiles[worst], e1, e2)?;
         tiles[worst] = a;
         tiles.push(b);
     }
@@ -151,19 +210,21 @@ pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option
     Some(rows)
 }
 
-/// The smallest `alpha` (to 1 %) whose tiles fit in `max_points`, or `None` when no lobe's do.
-pub fn narrowest_alpha(lights: &[KeyLight], max_points: usize) -> Option<f64> {
+/// The smallest `alpha` (to 1 %) whose tiles fit in `max_points(alpha)` points, or `None` when no
+/// lobe's do.
+pub fn narrowest_alpha(lights: &[KeyLight], max_points: impl Fn(f64) -> usize) -> Option<f64> {
+    let fits = |a: f64| tile_points(lights, a, max_points(a)).is_some();
     let widest = lights.iter().map(|l| l.spread / QUADRATURE_RATIO).fold(0.0, f64::max);
-    if !(widest.is_finite() && widest > 0.0) || tile_points(lights, widest * 1.0001, max_points).is_none() {
+    if !(widest.is_finite() && widest > 0.0) || !fits(widest * 1.0001) {
         return None;
     }
     let (mut lo, mut hi) = (widest * 1e-3, widest * 1.0001);
-    if tile_points(lights, lo, max_points).is_some() {
+    if fits(lo) {
         return Some(lo);
     }
     while hi / lo > 1.01 {
         let mid = (lo * hi).sqrt();
-        if tile_points(lights, mid, max_points).is_some() {
+        if fits(mid) {
             hi = mid;
         } else {
             lo = mid;
