@@ -215,7 +215,7 @@ pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option
 pub fn narrowest_alpha(lights: &[KeyLight], max_points: impl Fn(f64) -> usize) -> Option<f64> {
     let fits = |a: f64| tile_points(lights, a, max_points(a)).is_some();
     let widest = lights.iter().map(|l| l.spread / QUADRATURE_RATIO).fold(0.0, f64::max);
-    if !(widest.is_finite() && widest > 0.0) || !fits(widest * 1.0001) {
+    if !(widest.is_finite() && widest > 0.0 && fits(widest * 1.0001)) {
         return None;
     }
     let (mut lo, mut hi) = (widest * 1e-3, widest * 1.0001);
