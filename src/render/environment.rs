@@ -3,6 +3,9 @@
 //! importance-sampling tables, and the key lights split off the map with the residual's own texture and
 //! SH (the `key` estimator). Built once per environment and kept until it changes.
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+
 use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
@@ -77,6 +80,12 @@ fn point_set(ctx: &Context, rows: &[[f32; 8]], name: &str) -> Result<Buffer> {
     Buffer::upload(ctx, &gpu::light_set_bytes(rows), vk::BufferUsageFlags::UNIFORM_BUFFER, name)
 }
 
+/// A lobe's tiles: the rows of `keylight::tiles::tile_points`, or `None` where they do not fit.
+type Tiles = Option<Vec<[f32; 8]>>;
+
+/// How many lobes' tiles a map keeps (`GpuKeyLights::tiles`; all are dropped when it is full).
+const TILES_KEPT: usize = 1024;
+
 /// The key lights of a map on the GPU (issue 10's estimator): the residual map (lights replaced by
 /// their local background) with its mip chain and SH, and the lights' cones. Absent when the map has
 /// no key light.
@@ -98,6 +107,9 @@ pub struct GpuKeyLights {
     pub lights: Vec<keylight::KeyLight>,
     /// The wide lights beside them (`keylight::WideLights`), if the map has any.
     pub wide: Option<GpuWideLights>,
+    /// The tiles made so far (`keylight::tiles`), by lobe roughness and point allowance: a frame
+    /// asks for them per lobe, and an edit changes one lobe at a time.
+    tiles: RefCell<HashMap<(u64, usize), Tiles>>,
 }
 
 /// The wide lights on the GPU: the residual map without them (and without the key lights), and
@@ -317,6 +329,22 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 }
 
 impl GpuKeyLights {
+    /// The rows of `keylight::tiles::tile_points` for a lobe of smaller roughness `alpha` and at most
+    /// `max_points` points, made once per map (at most `TILES_KEPT` kept).
+    pub fn tiles(&self, alpha: f64, max_points: usize) -> Tiles {
+        let key = (alpha.to_bits(), max_points);
+        if let Some(made) = self.tiles.borrow().get(&key) {
+            return made.clone();
+        }
+        let made = keylight::tiles::tile_points(&self.lights, alpha, max_points);
+        let mut kept = self.tiles.borrow_mut();
+        if kept.len() >= TILES_KEPT {
+            kept.clear();
+        }
+        kept.insert(key, made.clone());
+        made
+    }
+
     /// The light samples of frame `seed` (`M = samples`): frame 0 takes the middle of each stratum,
     /// a later frame shifts the strata and the points within texels by a hash of its seed.
     pub fn frame_samples(&self, samples: u32, seed: u32) -> Vec<[f32; 8]> {
@@ -359,7 +387,8 @@ impl GpuKeyLights {
             Err(_) => unreachable!("the closure pushed three buffers before succeeding"),
         };
         let lights = keys.lights.clone();
-        let mut gpu = GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, wide: None };
+        let tiles = RefCell::default();
+        let mut gpu = GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, wide: None, tiles };
         if let Some(w) = &keys.wide {
             match GpuWideLights::new(ctx, keys, w) {
                 Ok(g) => gpu.wide = Some(g),

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::brdf::Material;
 use crate::error::{Error, Result};
-use crate::scene::keylight::tiles::{max_points, tile_points};
+use crate::scene::keylight::tiles::max_points;
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
@@ -208,7 +208,8 @@ impl Renderer {
                 let reach = pays.then(|| lobe::reach_angle(l));
                 let reach_test = self.light_reach_test && pays;
                 let tiled = match key_lights.filter(|_| !whole && self.light_tiles) {
-                    Some(k) => tile_points(&k.lights, l.alpha_x.min(l.alpha_y), max_points(&k.lights, reach))
+                    Some(k) => k
+                        .tiles(l.alpha_x.min(l.alpha_y), max_points(&k.lights, reach))
                         .map(|rows| tiles.push((i as u32, rows)))
                         .is_some(),
                     None => false,

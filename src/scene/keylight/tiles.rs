@@ -24,11 +24,10 @@ use glam::DVec3;
 
 use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 
-/// The most points a lobe's tiles may take: the lobe pass evaluates every point at every pixel (in
-/// the light's reach), about a seventh of a BRDF sample's cost each on lavapipe (512², studio: an
-/// anisotropic lobe's 132 points took its pass from 28 to 59–79 ms, a 44-point lobe's stayed at
-/// 21–25 ms with the reach test), so a lobe that needs more keeps MIS (the uniform block would hold
-/// 512, `render::gpu`).
+/// The most points a lobe's tiles may take where every shaded pixel evaluates them all (no reach
+/// test, see [`max_points`]): a point costs about a seventh of a BRDF sample on lavapipe (512²,
+/// studio: an anisotropic lobe's 132 points took its pass from 28 to 59–79 ms, a 44-point lobe's
+/// stayed at 21–27 ms with the reach test), so a lobe that needs more keeps MIS.
 pub const MAX_TILE_POINTS: usize = 64;
 
 /// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`).
@@ -189,8 +188,8 @@ fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Til
 }
 
 /// The `[direction, 0, power / 4, 0]` rows of every light's tiles' points for a lobe of smaller
-/// roughness `alpha`, at most `max_points` in all; `None` when the lobe is too narrow for that many
-/// (or for single texels). Where every light fits whole ([`super::quadrature_fits`]) these are
+/// roughness `alpha`, at most `max_points` in all; `None` when the lobe is too narrow for that many.
+/// Where every light fits whole ([`super::quadrature_fits`]) these are
 /// [`super::point_table`]'s rows.
 pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option<Vec<[f32; 8]>> {
     if !(alpha > 0.0) {
