@@ -65,7 +65,7 @@ layout(std430, set = 0, binding = 5) readonly buffer Halton { Group g[]; } halto
 // LIGHTS: the lights' texels, rgb L_key and alpha the pdf over (u, v) (`GpuKeyLights::texels`), and
 // their cones; bound to stand-ins otherwise.
 layout(set = 0, binding = 6) uniform sampler2D light_tex;
-// count: (lights, CDF entries, 0, 0); per light vec4(direction, cos extent), vec4(power rgb, 0).
+// count: (lights, CDF entries, 0, 0); per light vec4(direction, cos extent), vec4(power rgb, extent).
 layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 // The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
 // vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
@@ -86,8 +86,9 @@ float normal_tag(vec3 n) {
 }
 
 #define MAX_LIGHTS 4
-// The lights' cones, read once before any branch.
+// The lights' cones and their half-angles, read once before any branch.
 vec4 g_cone[MAX_LIGHTS];
+float g_extent[MAX_LIGHTS];
 uint g_lights;
 // The light MIS: the lobe, its ω_o, frame rotation q, form, light and BRDF sample counts, and the sum.
 GpuLobe g_lobe;
@@ -438,21 +439,26 @@ vec3 lobe_sum(GpuLobe l, vec4 q, vec3 wo, Frame f, float omega_texel, float n, v
 // ellipse is at least min(αx, αy)(|A s₀| − REACH) and at least |s₀| − REACH max(αx, αy); the light is
 // out of reach where either exceeds ρ (and within the isotropic test's reach otherwise). A cone
 // wholly below the horizon gives nothing.
+// Without inverse trigonometry: angles
+// are compared by their cosines, cos(a + b) = cos a cos b − sin a sin b for a + b ≤ π (cos a +
+// cos b > 0), and cos(θ₀ + δ) is bounded below by cos θ₀ (1 − δ²/2) − sin θ₀ δ, which only makes
+// ρ larger (a light kept that a sharper bound would skip).
 // `lobe::REACH` is the same number.
 #define REACH 5.0
-bool ellipse_sees(Frame f, vec4 shape, vec3 b, vec4 cone) {
+bool ellipse_sees(Frame f, vec4 shape, vec3 b, vec4 cone, float eps) {
     vec3 l = to_local(f, cone.xyz);
-    float eps = acos(clamp(cone.w, -1.0, 1.0));
-    if (l.z < -sin(min(eps, 0.5 * PI))) return false;
-    float far = 0.5 * (acos(clamp(dot(b, l), -1.0, 1.0)) + eps);
+    float ce = clamp(cone.w, -1.0, 1.0), se = sqrt(1.0 - ce * ce);
+    if (ce >= 0.0 && l.z < -se) return false;
+    // cos((γ + ε)/2) from cos(γ + ε); past γ + ε = π (or within 2·10⁻³ of it) no bound.
+    float cg = clamp(dot(b, l), -1.0, 1.0), sg = sqrt(1.0 - cg * cg);
+    float cos_far = cg + ce > 0.0 ? sqrt(max(0.5 * (1.0 + cg * ce - sg * se), 0.0)) : 0.0;
     vec3 h = b + l;
     float len = length(h);
-    if (!(far < 0.5 * PI - 1e-3 && len > 1e-6)) return true;
+    if (!(cos_far > 1e-3 && len > 1e-6)) return true;
     h /= len;
-    float delta = eps / (2.0 * cos(far));
-    float top = acos(clamp(h.z, -1.0, 1.0)) + delta;
-    if (!(top < 0.5 * PI - 1e-3)) return true;
-    float c = cos(top);
+    float delta = eps / (2.0 * cos_far);
+    float c = h.z * (1.0 - 0.5 * delta * delta) - sqrt(max(1.0 - h.z * h.z, 0.0)) * delta;
+    if (!(h.z > 0.0 && c > 1e-3)) return true;
     float rho = delta / (c * c);
     vec2 s = h.xy / h.z;
     vec2 st = vec2(s.x * shape.z + s.y * shape.w, -s.x * shape.w + s.y * shape.z);
@@ -462,12 +468,18 @@ bool ellipse_sees(Frame f, vec4 shape, vec3 b, vec4 cone) {
 }
 bool sees_lights(Frame f, vec4 shape, vec3 b) {
     vec3 r = to_world(f, vec3(-b.x, -b.y, b.z));
-    float reach = 2.0 * atan(REACH * max(shape.x, shape.y));
+    // The reach 2 atan(t), t = REACH α_max: cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²).
+    float t = REACH * max(shape.x, shape.y);
+    float cr = (1.0 - t * t) / (1.0 + t * t), sr = 2.0 * t / (1.0 + t * t);
     bool seen = false;
+    // A loop of constant count, unrolled; the lights past the map's count (copies of its last one)
+    // are skipped by a condition the same for every lane (pass.glsl: such a side costs nothing).
     for (int k = 0; k < MAX_LIGHTS; k++) {
-        float apart = acos(clamp(dot(r, g_cone[k].xyz), -1.0, 1.0));
-        bool near = apart <= acos(clamp(g_cone[k].w, -1.0, 1.0)) + reach;
-        if (ANISO) near = near && ellipse_sees(f, shape, b, g_cone[k]);
+        if (uint(k) >= g_lights) continue;
+        // Within the cone's half-angle plus the reach: cos(apart) ≥ cos(ε + reach), always past π.
+        float ce = clamp(g_cone[k].w, -1.0, 1.0), se = sqrt(1.0 - ce * ce);
+        bool near = !(ce + cr > 0.0) || dot(r, g_cone[k].xyz) >= ce * cr - se * sr;
+        if (ANISO) near = near && ellipse_sees(f, shape, b, g_cone[k], g_extent[k]);
         seen = seen || near;
     }
     return seen;
@@ -479,7 +491,11 @@ void main() {
     if (LIGHTS) {
         g_lights = min(lights.count.x, uint(MAX_LIGHTS));
         // Missing lights repeat the last one (the cone test ORs all four).
-        for (uint k = 0u; k < uint(MAX_LIGHTS); k++) g_cone[k] = lights.v[2u * min(k, max(g_lights, 1u) - 1u)];
+        for (uint k = 0u; k < uint(MAX_LIGHTS); k++) {
+            uint j = min(k, max(g_lights, 1u) - 1u);
+            g_cone[k] = lights.v[2u * j];
+            g_extent[k] = lights.v[2u * j + 1u].w;
+        }
     }
     ivec2 p;
     if (!listed_pixel(p)) return;

@@ -94,7 +94,7 @@ pub struct GpuKeyLights {
     /// `Â_l · L_lm` of the residual, 9 × `vec4`.
     pub sh: Buffer,
     /// `uvec4(lights, 0, 0, 0)`, then per light `vec4(direction, cos extent)` and
-    /// `vec4(power rgb, 0)`.
+    /// `vec4(power rgb, extent)` (the extent in radians: `lobe.comp`'s reach test).
     pub cones: Buffer,
     /// Per texel of the map: the lights' radiance (rgb, read nearest) and the pdf over `(u, v)` of
     /// [`keylight::LightSampling`] (alpha): one fetch gives a BRDF sample both.
@@ -419,7 +419,7 @@ pub fn cone_table(lights: &[crate::scene::keylight::KeyLight]) -> Vec<f32> {
     for l in lights {
         let d = l.direction;
         out.extend_from_slice(&[d.x as f32, d.y as f32, d.z as f32, l.extent.cos() as f32]);
-        out.extend_from_slice(&[l.power[0] as f32, l.power[1] as f32, l.power[2] as f32, 0.0]);
+        out.extend_from_slice(&[l.power[0] as f32, l.power[1] as f32, l.power[2] as f32, l.extent as f32]);
     }
     out
 }
