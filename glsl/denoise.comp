@@ -8,16 +8,21 @@
 // samples traded for a bias of second order in σ / α. A pixel whose neighbours face elsewhere (a
 // silhouette, a crease) keeps its own value.
 //
-// Separable, as two passes of 2R + 1 taps over the shaded pixels (params.x 0: along x, `rough` →
-// `mid`, cleared to unmarked before; 1: along y, `mid` → added into the accumulation image): one load a tap. The 49 taps
-// of a (2R+1)² window, each a load of the G-buffer and of the value, cost more than a lobe pass on
-// llvmpipe (image loads go lane by lane there).
+// Separable, as two passes of 2R + 1 taps (params.x 0: along x, `rough` → `mid`, every pixel
+// written, unmarked ones as 0; 1: along y, `mid` → added into the accumulation image at the marked
+// pixels). An invocation takes a run of STRIP pixels along the pass's direction: it reads the
+// STRIP + 2R pixels under their windows once and decodes each normal once, where a pixel of its own
+// read and decoded 2R + 1 (session 15: 7 loads and 7 decodes a pixel a pass). The same sums, in the
+// same order. Pixels off the image are read clamped to its edge. The 49 taps of a (2R+1)² window,
+// each a load of the G-buffer and of the value, cost more than a lobe pass on llvmpipe (image loads
+// go lane by lane there).
 #extension GL_GOOGLE_include_directive : require
-#define PIXELS_BINDING 3
 #include "pass.glsl"
 #define R 3
-// Over the list of shaded pixels (compact.comp).
-layout(local_size_x = 64) in;
+#define STRIP 4
+#define SPAN (STRIP + 2 * R)
+// Over the image in runs of STRIP pixels (`denoise::groups`).
+layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D src;
 layout(set = 0, binding = 1, rgba32f) uniform image2D mid;
 layout(set = 0, binding = 2, rgba32f) uniform image2D accum;
@@ -34,32 +39,46 @@ vec3 tag_normal(float tag) {
 }
 
 void main() {
-    ivec2 p;
-    if (!listed_pixel(p)) return;
     bool along_y = pc.params.x != 0u;
-    // Marked: the lobe passes shade exactly the listed pixels.
-    vec4 c = imageLoad(src, p);
-    vec3 n = tag_normal(c.a);
-    float k_p = pc.fparams.x;
     ivec2 step = along_y ? ivec2(0, 1) : ivec2(1, 0);
+    ivec2 id = ivec2(gl_GlobalInvocationID.xy);
+    // The run's first pixel.
+    ivec2 first = along_y ? ivec2(id.x, STRIP * id.y) : ivec2(STRIP * id.x, id.y);
+    if (!inside(first)) return;
     ivec2 last = ivec2(pc.size.xy) - 1;
-    // The centre with weight 1 (its own normal: exactly 1, not what rounding makes of the formula).
-    vec3 sum = c.rgb;
-    float wsum = 1.0;
-    // A loop of constant count, unrolled.
-    for (int k = -R; k <= R; k++) {
-        if (k == 0) continue;
-        vec4 t = imageLoad(src, clamp(p + k * step, ivec2(0), last));
-        float w = t.a < 0.5 ? 0.0 : exp(-(1.0 - dot(n, tag_normal(t.a))) * k_p);
-        sum += w * t.rgb;
-        wsum += w;
+    float k_p = pc.fparams.x;
+    // The pixels under the run's windows: values, tags, and normals where marked. Constant indices
+    // throughout (the loops unroll): the arrays stay in registers.
+    vec4 c[SPAN];
+    vec3 n[SPAN];
+    for (int i = 0; i < SPAN; i++) {
+        c[i] = imageLoad(src, clamp(first + (i - R) * step, ivec2(0), last));
+        n[i] = c[i].a < 0.5 ? vec3(0.0) : tag_normal(c[i].a);
     }
-    vec3 v = sum / wsum;
-    if (!along_y) {
-        imageStore(mid, p, vec4(v, c.a));
-    } else {
-        vec4 acc = imageLoad(accum, p);
-        acc.rgb += v;
-        imageStore(accum, p, acc);
+    for (int j = 0; j < STRIP; j++) {
+        ivec2 p = first + j * step;
+        if (!inside(p)) continue;
+        vec4 centre = c[j + R];
+        vec3 v = vec3(0.0);
+        if (centre.a >= 0.5) {
+            // The centre with weight 1 (its own normal: exactly 1, not what rounding makes of the formula).
+            vec3 sum = centre.rgb;
+            float wsum = 1.0;
+            for (int k = -R; k <= R; k++) {
+                if (k == 0) continue;
+                vec4 t = c[j + R + k];
+                float w = t.a < 0.5 ? 0.0 : exp(-(1.0 - dot(n[j + R], n[j + R + k])) * k_p);
+                sum += w * t.rgb;
+                wsum += w;
+            }
+            v = sum / wsum;
+        }
+        if (!along_y) {
+            imageStore(mid, p, vec4(v, centre.a));
+        } else if (centre.a >= 0.5) {
+            vec4 acc = imageLoad(accum, p);
+            acc.rgb += v;
+            imageStore(accum, p, acc);
+        }
     }
 }

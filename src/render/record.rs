@@ -49,10 +49,15 @@ impl Recording<'_> {
     /// Dispatches 8×8 groups over the image, then orders the accumulation image's writes before the
     /// next pass's reads and writes.
     pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
-        pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
         let (w, h) = (self.targets.width, self.targets.height);
+        self.dispatch_groups(pipeline, set, push, (w.div_ceil(8), h.div_ceil(8)));
+    }
+
+    /// Dispatches `groups` workgroups, then orders the accumulation image as [`Self::dispatch`].
+    pub fn dispatch_groups(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push, groups: (u32, u32)) {
+        pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
         // SAFETY: `cmd` is recording with a compute pipeline bound.
-        unsafe { self.ctx.raw().cmd_dispatch(self.cmd, w.div_ceil(8), h.div_ceil(8), 1) };
+        unsafe { self.ctx.raw().cmd_dispatch(self.cmd, groups.0, groups.1, 1) };
         crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 

@@ -60,7 +60,7 @@ impl Targets {
             made.push(rgba(src | dst, "accum")?);
             made.push(rgba(src, "refinement.sum")?);
             made.push(rgba(dst, "rough")?);
-            made.push(rgba(dst, "rough.mid")?);
+            made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
             super::compact::list_buffer(ctx, width, height)
         })();
         let pixels = match built {
