@@ -25,7 +25,8 @@ fn renderer() -> Renderer {
 /// tens of times while the lobe passes stay within a factor 3 (fastest of 3 frames each; the factor
 /// is a bound on the noise of lavapipe sharing 2 cores with the rest of the suite, not a speed target —
 /// alone they stay within 1.4). The rows count their pixel-samples, and the device's peak is measured
-/// for the share of it the lobe passes reach.
+/// for the share of it the lobe passes reach. The goal scene's `goal-kept` row (the editor's frame
+/// while its camera stays) runs the goal row's shading passes and no G-buffer pass.
 #[test]
 fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     let mut r = renderer();
@@ -70,6 +71,14 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     assert_eq!(four.pixel_samples, 4 * one.pixel_samples);
     let goal = rows.iter().find(|m| m.group == "goal").expect("the goal row");
     assert_eq!(goal.pixel_samples, 5 * one.pixel_samples, "{}", goal.label);
+    // The goal scene with its G-buffer kept: the same shading passes, no G-buffer pass.
+    let kept = rows.iter().find(|m| m.group == "goal-kept").expect("the kept goal row");
+    let shading = |m: &bench::Measurement| -> Vec<String> {
+        m.passes.iter().map(|p| p.0.clone()).filter(|n| n != "gbuffer").collect()
+    };
+    assert!(goal.passes.iter().any(|p| p.0 == "gbuffer"), "{:?}", goal.passes);
+    assert_eq!(shading(kept), shading(goal));
+    assert_eq!(kept.pixel_samples, goal.pixel_samples);
     let mis = rows.iter().find(|m| m.label == "mis").expect("mis");
     assert_eq!(mis.pixel_samples, one.pixel_samples);
     // The peak is measured, and no lobe pass reaches it: lavapipe runs them at 3–10 % of it, so a
@@ -83,7 +92,7 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     }
     let text = bench::table(&rows, "test", peak);
     assert!(text.lines().count() > rows.len(), "{text}");
-    assert!(text.contains("goal (issue 10"), "{text}");
+    assert!(text.contains("goal (issue 10") && text.contains("G-buffer kept"), "{text}");
 }
 
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
