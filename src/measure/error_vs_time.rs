@@ -386,7 +386,10 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
         let Some(&(_, kms, ke)) = key.iter().find(|p| p.0 == 8).or(key.last()) else { continue };
         let at = match error_at(&key, fms) {
             Some(e) => format!("{e:.4}"),
-            None => format!("— (key at 1 spp takes {:.2} ms)", key.first().map_or(0.0, |p| p.1)),
+            None => match key.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+                Some(&(spp, ms, _)) => format!("— (key's cheapest frame: {spp} spp, {ms:.2} ms)"),
+                None => "—".to_string(),
+            },
         };
         let speedups: Vec<String> = [Estimator::Fis, Estimator::Plain, Estimator::Mis]
             .iter()
