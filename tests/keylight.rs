@@ -398,7 +398,7 @@ fn a_narrower_lobe_sees_the_lights_as_tiles_within_the_same_bound() {
         );
         assert!(narrowest < unreached && unreached < widest);
         // The reach test's allowance lies between the two limits and grows as the reach narrows.
-        let reached = |a: f64| max_points(&keys.lights, Some(2.0 * (5.0 * a).atan()));
+        let reached = |a: f64| max_points(&keys.lights, Some(((5.0 * a).atan(), (5.0 * a).atan())));
         assert!(reached(0.01) >= reached(0.1) && reached(0.1) >= MAX_TILE_POINTS);
         assert!(reached(0.01) <= MAX_BLOCK_POINTS && max_points(&keys.lights, None) == MAX_TILE_POINTS);
         for step in 0..=6 {

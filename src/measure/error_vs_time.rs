@@ -386,9 +386,10 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
         let Some(&(_, kms, ke)) = key.iter().find(|p| p.0 == 8).or(key.last()) else { continue };
         let at = match error_at(&key, fms) {
             Some(e) => format!("{e:.4}"),
+            // Outside key's times: below its cheapest frame, or (not seen) past its dearest.
             None => match key.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-                Some(&(spp, ms, _)) => format!("— (key's cheapest frame: {spp} spp, {ms:.2} ms)"),
-                None => "—".to_string(),
+                Some(&(spp, ms, _)) if fms < ms => format!("— (key's cheapest frame: {spp} spp, {ms:.2} ms)"),
+                _ => "— (past key's longest frame)".to_string(),
             },
         };
         let speedups: Vec<String> = [Estimator::Fis, Estimator::Plain, Estimator::Mis]
@@ -407,7 +408,7 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
             speedups.join(" / ")
         ));
     }
-    s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more. A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");
+    s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more (or, not seen, where fis-8 takes longer than key's longest frame). A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");
     if !decisions.is_empty() {
         s.push_str("Key lights per map (`key` splits these off; a map without one gets no light term):\n\n");
         for (map, d) in decisions {

@@ -186,14 +186,16 @@ impl KeyLightSummary {
     }
 
     /// The smallest `α` of an isotropic lobe of one component that sees the key lights as tiles
-    /// (`keylight::tiles`, within `tiles::max_points`, with the reach test where it pays), to 1 %;
-    /// `None` without lights.
+    /// (`keylight::tiles`, within `tiles::max_points`, with the reach test where it pays; Ward's
+    /// reach, the wider), to 1 %; `None` without lights.
     pub fn tiles_min_alpha(&self) -> Option<f64> {
+        use super::lobe::{reach_angle, reach_half_angles, REACH_TEST_MAX_DEG};
         use crate::scene::keylight::tiles::{max_points, narrowest_alpha};
+        let ward = crate::brdf::Normalization::Ward;
         narrowest_alpha(&self.lights, |a| {
             let lobe = crate::brdf::Lobe::isotropic([1.0; 3], a);
-            let reach = super::lobe::reach_angle(&lobe);
-            max_points(&self.lights, (reach.to_degrees() <= super::lobe::REACH_TEST_MAX_DEG).then_some(reach))
+            let pays = reach_angle(ward, &lobe).to_degrees() <= REACH_TEST_MAX_DEG;
+            max_points(&self.lights, pays.then(|| reach_half_angles(ward, &lobe)))
         })
     }
 

@@ -210,7 +210,7 @@ impl Renderer {
                 // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
                 // tiles with the test off give the same image (a test compares).
                 let pays = lights && lobe::reach_test_pays(material, l);
-                let reach = pays.then(|| lobe::reach_angle(l));
+                let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
                 let reach_test = self.light_reach_test && pays;
                 let tiled = match key_lights.filter(|_| !whole && self.light_tiles) {
                     Some(k) => k

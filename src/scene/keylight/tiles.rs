@@ -35,15 +35,22 @@ pub const MAX_BLOCK_POINTS: usize = 512;
 
 /// The most points a lobe's tiles may take. Without the per-pixel reach test every shaded pixel
 /// evaluates them all: [`MAX_TILE_POINTS`]. A lobe whose pass skips the pixels out of the lights'
-/// reach (`reach`: the angle `2 atan(5 α_max)` of `render::lobe::reach_test_pays`, radians) evaluates
-/// them only where its mirror direction comes within `reach + extent` of a light: on a sphere at most a
-/// share `2 (1 − cos((reach + extent)/2))` of the pixels (normals within half that angle of the
-/// light's half vector, weighted by `n·v` over the visible hemisphere). Twice that share (vectors of 8
-/// pixels straddle its edge) times the points stays within `MAX_TILE_POINTS`, up to the block's
-/// [`MAX_BLOCK_POINTS`].
-pub fn max_points(lights: &[KeyLight], reach: Option<f64>) -> usize {
-    let Some(reach) = reach else { return MAX_TILE_POINTS };
-    let half = |l: &KeyLight| (0.5 * (reach + l.extent)).min(std::f64::consts::FRAC_PI_2);
+/// reach (`reach`: the angles from the normal, along each tangent axis, past which its half vector is
+/// out of reach, `render::lobe::reach_half_angles`, radians) evaluates them only at the pixels whose
+/// normal has a light's half vector within that ellipse widened by half the light's extent (the half
+/// vector turns by half as much as the light's direction). On a sphere that is at most the share
+/// `2 (1 − cos θ)` of the pixels, `θ` the half-angle of the circle of the widened ellipse's area
+/// `π a b + P ε/2 + π ε²/4` (`P` its perimeter, Ramanujan's approximation; `θ = a + ε/2` for a circle),
+/// weighted by `n·v` over the visible hemisphere. Twice that share (vectors of 8 pixels straddle its
+/// edge) times the points stays within `MAX_TILE_POINTS`, up to the block's [`MAX_BLOCK_POINTS`].
+pub fn max_points(lights: &[KeyLight], reach: Option<(f64, f64)>) -> usize {
+    let Some((a, b)) = reach else { return MAX_TILE_POINTS };
+    let perimeter = std::f64::consts::PI * (3.0 * (a + b) - ((3.0 * a + b) * (a + 3.0 * b)).sqrt());
+    let half = |l: &KeyLight| {
+        let e = 0.5 * l.extent;
+        let area = std::f64::consts::PI * (a * b + e * e) + perimeter * e;
+        (area / std::f64::consts::PI).sqrt().min(std::f64::consts::FRAC_PI_2)
+    };
     let share: f64 = lights.iter().map(|l| 4.0 * (1.0 - half(l).cos())).sum::<f64>().min(1.0);
     if !(share > 0.0) {
         return MAX_BLOCK_POINTS;
