@@ -11,6 +11,7 @@ use crate::brdf::{Lobe, Material, Normalization};
 use crate::error::Result;
 use crate::render::{Estimator, Renderer, Settings, View};
 use crate::scene::{Camera, Mesh};
+use crate::vk::query::PassTime;
 
 #[derive(Clone, Debug)]
 pub struct Plan {
@@ -162,27 +163,28 @@ fn pixel_samples(m: &Material, s: &Settings, covered: u64) -> u64 {
     covered * u64::from(s.spp) * components
 }
 
-fn measure(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize) -> Result<Times> {
+/// Per pass and in total, the spread of the frames' GPU times.
+fn spreads(frames: Vec<Vec<PassTime>>, pixel_samples: u64) -> Times {
     let mut per: Vec<(String, Vec<f64>)> = Vec::new();
     let mut totals = Vec::new();
-    // One frame first, not counted: drivers (lavapipe among them) compile pipelines on first use.
-    let first = r.render(m, s)?;
-    let covered = first.image.pixels.iter().filter(|p| p[3] > 0.5).count() as u64;
-    for _ in 0..repeats.max(1) {
-        let frame = r.render(m, s)?;
-        totals.push(frame.timings.iter().map(|t| t.ms).sum());
-        for t in frame.timings {
+    for timings in frames {
+        totals.push(timings.iter().map(|t| t.ms).sum());
+        for t in timings {
             match per.iter_mut().find(|p| p.0 == t.name) {
                 Some(p) => p.1.push(t.ms),
                 None => per.push((t.name, vec![t.ms])),
             }
         }
     }
-    Ok((
-        per.into_iter().map(|(n, v)| (n, super::stats(&v))).collect(),
-        super::stats(&totals),
-        pixel_samples(m, s, covered),
-    ))
+    (per.into_iter().map(|(n, v)| (n, super::stats(&v))).collect(), super::stats(&totals), pixel_samples)
+}
+
+fn measure(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize) -> Result<Times> {
+    // One frame first, not counted: drivers (lavapipe among them) compile pipelines on first use.
+    let first = r.render(m, s)?;
+    let covered = first.image.pixels.iter().filter(|p| p[3] > 0.5).count() as u64;
+    let frames = (0..repeats.max(1)).map(|_| r.render(m, s).map(|f| f.timings)).collect::<Result<Vec<_>>>()?;
+    Ok(spreads(frames, pixel_samples(m, s, covered)))
 }
 
 /// The frames of `s` as the editor draws them while its camera stays: each keeps the G-buffer (and
@@ -209,25 +211,11 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
     }
     r.finish_frames()?;
     r.ctx.check_validation()?;
-    let frames = r.take_finished();
-    let mut per: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut totals = Vec::new();
-    for f in frames.into_iter().skip(1) {
-        if f.timings.iter().any(|t| t.name == "gbuffer") {
-            return Err(crate::Error::input(
-                "bench",
-                "a frame with the camera unchanged rasterised its G-buffer again",
-            ));
-        }
-        totals.push(f.timings.iter().map(|t| t.ms).sum());
-        for t in f.timings {
-            match per.iter_mut().find(|p| p.0 == t.name) {
-                Some(p) => p.1.push(t.ms),
-                None => per.push((t.name, vec![t.ms])),
-            }
-        }
+    let frames: Vec<Vec<PassTime>> = r.take_finished().into_iter().skip(1).map(|f| f.timings).collect();
+    if frames.iter().any(|timings| timings.iter().any(|t| t.name == "gbuffer")) {
+        return Err(crate::Error::input("bench", "a frame with the camera unchanged rasterised its G-buffer again"));
     }
-    Ok((per.into_iter().map(|(n, v)| (n, super::stats(&v))).collect(), super::stats(&totals), pixel_samples))
+    Ok(spreads(frames, pixel_samples))
 }
 
 fn settings((w, h): (u32, u32), spp: u32) -> Settings {

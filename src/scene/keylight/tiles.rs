@@ -44,12 +44,12 @@ pub const MAX_BLOCK_POINTS: usize = 512;
 /// weighted by `n·v` over the visible hemisphere. Twice that share (vectors of 8 pixels straddle its
 /// edge) times the points stays within `MAX_TILE_POINTS`, up to the block's [`MAX_BLOCK_POINTS`].
 pub fn max_points(lights: &[KeyLight], reach: Option<(f64, f64)>) -> usize {
+    use std::f64::consts::{FRAC_PI_2, PI};
     let Some((a, b)) = reach else { return MAX_TILE_POINTS };
-    let perimeter = std::f64::consts::PI * (3.0 * (a + b) - ((3.0 * a + b) * (a + 3.0 * b)).sqrt());
+    let perimeter = PI * (3.0 * (a + b) - ((3.0 * a + b) * (a + 3.0 * b)).sqrt());
     let half = |l: &KeyLight| {
         let e = 0.5 * l.extent;
-        let area = std::f64::consts::PI * (a * b + e * e) + perimeter * e;
-        (area / std::f64::consts::PI).sqrt().min(std::f64::consts::FRAC_PI_2)
+        (a * b + e * e + perimeter * e / PI).sqrt().min(FRAC_PI_2)
     };
     let share: f64 = lights.iter().map(|l| 4.0 * (1.0 - half(l).cos())).sum::<f64>().min(1.0);
     if !(share > 0.0) {
