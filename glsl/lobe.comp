@@ -32,11 +32,17 @@
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
 // FILTERED (fparams.y 1; a rough lobe, render/denoise.rs): the set is shifted per
-// pixel instead, so each pixel's quadrature error is its own; the samples' sum goes into `rough`
+// pixel instead (at a few samples stratified over the filter's window), so each pixel's quadrature
+// error is its own (and a window's pixels together sample the lobe evenly); the samples' sum goes into `rough`
 // (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
 // over neighbours of like normal, and the light term (points: no noise to filter) into the
 // accumulation image (binding 10). fparams.x then holds denoise::LOD_BIAS.
 #extension GL_GOOGLE_include_directive : require
+// The filter's window along each axis, 2R + 1 in denoise.comp (`denoise::RADIUS`); the strata
+// below are mod 7.
+#define FILTER_WINDOW 7
+// The most samples whose per-pixel shifts are stratified over that window (below).
+#define FEW_SAMPLES 4u
 #define PIXELS_BINDING 9
 #include "pass.glsl"
 // Over the list of shaded pixels (compact.comp).
@@ -524,13 +530,28 @@ void main() {
     // that each pixel's quadrature error is its own (render/denoise.rs).
     bool filtered = pc.fparams.y > 0.5;
     uint seed = hash_u32(pc.params.z);
-    if (filtered) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
+    if (filtered && pc.params.y > FEW_SAMPLES) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
+    // Up to FEW_SAMPLES samples, the shifts are stratified over the filter's window of W × W
+    // pixels: pixel p takes the stratum M (p mod W) of the W × W grid over [0, 1)², M = (5 1; 1 2),
+    // invertible mod 7, so every window holds each stratum once (its W² sets together: a shifted
+    // W² N-point set, the frame's hash the shift within the stratum), and pixels within two of each
+    // other take strata at least two apart. Its ξ₁ then stops at the middle of the last of the W N
+    // strata of ξ₁ that the window's sets fill (for N = 2^m their ξ₁ are the multiples of
+    // 1 / (W N), shifted), where a hash per pixel stops at the middle of the pixel's own last
+    // stratum, 1 − ½/N: a shift toward 1 would reach −log(1 − ξ₁) → ∞, where a Ward lobe's weight
+    // exp(E_W − E_1) grows without bound (at 32², Ward α 0.5, 256 spp, a hash per pixel: 4.2 % off
+    // the reference with a few silhouette pixels 10× too bright, 1.3 % capped; the unshifted set's
+    // largest ξ₁ is 1 − 1/N). Measured against a hash per pixel (session 17, α 0.5, the mean of 8
+    // frames' seeds, 4 scenes of venice, city, studio): at 64², 1 spp 0.07–0.15 → 0.04–0.11,
+    // 4 spp 0.039–0.060 → 0.027–0.040; at 32², lower at 1–4 spp on all four, but at 8 spp higher
+    // on studio (0.034 → 0.043), hence the hash from 8 samples on.
+    bool strata = filtered && pc.params.y <= FEW_SAMPLES;
     vec2 rot = KEY && (filtered || pc.params.z != 0u) ? vec2(hash_unit(seed), hash_unit(seed ^ 0x85ebca6bu)) : vec2(0.0);
-    // Its ξ₁ stops at the middle of the last stratum: a shift toward 1 would reach −log(1 − ξ₁) → ∞,
-    // where a Ward lobe's weight exp(E_W − E_1) grows without bound (at 32², Ward α 0.5, 256 spp:
-    // 4.2 % off the reference with a few silhouette pixels 10× too bright, 1.3 % capped; the unshifted
-    // set's largest ξ₁ is 1 − 1/N).
-    if (filtered) g_x1_max = 1.0 - 0.5 / float(pc.params.y);
+    if (strata) {
+        uvec2 u = uvec2(p) % uint(FILTER_WINDOW);
+        rot = (vec2(float((5u * u.x + u.y) % 7u), float((u.x + 2u * u.y) % 7u)) + rot) / float(FILTER_WINDOW);
+    }
+    if (filtered) g_x1_max = 1.0 - 0.5 / ((strata ? float(FILTER_WINDOW) : 1.0) * float(pc.params.y));
     float n = float(pc.params.y);
     float omega_texel = (2.0 * PI / float(pc.size.z)) * (PI / float(pc.size.w));
     float half_sym = SYM ? 0.5 : 1.0;

@@ -2,7 +2,8 @@
 //! estimate is noise-limited (8 points over a lobe tens of degrees wide: 8–11 % off at 8 spp on
 //! every map), while its outgoing radiance is smooth in the normal on the scale of its roughness.
 //! The lobe passes of the lobes that [`fits`] admits write their sample sums into `Targets::rough`
-//! with the sample set shifted per pixel (each pixel's error its own), reading the map at the
+//! with the sample set shifted per pixel (each pixel's error its own; up to 4 samples the shifts are
+//! stratified over the window, so that its pixels together sample the lobe evenly), reading the map at the
 //! sharper [`LOD_BIAS`], and mark each pixel with its normal; their light terms (points, no noise)
 //! go straight into the accumulation image. This pass then adds the normal-weighted mean of `rough`
 //! over a window (`glsl/denoise.comp`, separable: two passes of 7 taps over the image, each
@@ -31,7 +32,8 @@ pub const SIGMA_OVER_ALPHA: f64 = 0.3;
 /// 8 spp, 64²: bias 0 / −1 / −2 / −3 0.168 / 0.066 / 0.044 / 0.046 filtered; the footprint's blur is a
 /// bias the filter cannot take away).
 pub const LOD_BIAS: f32 = -2.0;
-/// The window's radius in pixels, `R` in `denoise.comp`: (2·3 + 1)² = 49 taps.
+/// The window's radius in pixels, `R` in `denoise.comp`: (2·3 + 1)² = 49 taps (`lobe.comp`'s
+/// `FILTER_WINDOW` 7 stratifies the lobe passes' shifts over it).
 pub const RADIUS: u32 = 3;
 /// The pixels an invocation filters, a run along the pass's direction (`STRIP` in `denoise.comp`):
 /// it reads the `STRIP + 2 R` pixels under their windows once. Measured against the passes over the
