@@ -31,7 +31,7 @@
 // do not look for the lights.
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
-// FILTERED (fparams.y 1; a rough lobe, render/denoise.rs): the set is shifted per
+// FILTERED (fparams.y 1, or 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the set is shifted per
 // pixel instead (at a few samples stratified over the filter's window), so each pixel's quadrature
 // error is its own (and a window's pixels together sample the lobe evenly); the samples' sum goes into `rough`
 // (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
@@ -41,6 +41,9 @@
 // The filter's window along each axis, 2R + 1 in denoise.comp (`denoise::RADIUS`); the strata
 // below are mod 7.
 #define FILTER_WINDOW 7
+#if FILTER_WINDOW != 7
+#error "the strata M (p mod 7) below are mod 7"
+#endif
 // The most samples whose per-pixel shifts are stratified over that window (below).
 #define FEW_SAMPLES 4u
 #define PIXELS_BINDING 9
@@ -530,11 +533,14 @@ void main() {
     // that each pixel's quadrature error is its own (render/denoise.rs).
     bool filtered = pc.fparams.y > 0.5;
     uint seed = hash_u32(pc.params.z);
-    if (filtered && pc.params.y > FEW_SAMPLES) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
+    // fparams.y 2: filtered with a hash per pixel at every count (`Renderer::stratified_shifts` off).
+    bool strata = filtered && pc.fparams.y < 1.5 && pc.params.y <= FEW_SAMPLES;
+    if (filtered && !strata) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
     // Up to FEW_SAMPLES samples, the shifts are stratified over the filter's window of W × W
     // pixels: pixel p takes the stratum M (p mod W) of the W × W grid over [0, 1)², M = (5 1; 1 2),
-    // invertible mod 7, so every window holds each stratum once (its W² sets together: a shifted
-    // W² N-point set, the frame's hash the shift within the stratum), and pixels within two of each
+    // invertible mod 7, so every window holds each stratum once (its W² sets together: the N-point
+    // set shifted to each cell of a W × W grid, the frame's hash the shift within the cell; each row
+    // and column of W pixels takes every ξ₁ and every ξ₂ stratum once), and pixels within two of each
     // other take strata at least two apart. Its ξ₁ then stops at the middle of the last of the W N
     // strata of ξ₁ that the window's sets fill (for N = 2^m their ξ₁ are the multiples of
     // 1 / (W N), shifted), where a hash per pixel stops at the middle of the pixel's own last
@@ -544,8 +550,13 @@ void main() {
     // largest ξ₁ is 1 − 1/N). Measured against a hash per pixel (session 17, α 0.5, the mean of 8
     // frames' seeds, 4 scenes of venice, city, studio): at 64², 1 spp 0.07–0.15 → 0.04–0.11,
     // 4 spp 0.039–0.060 → 0.027–0.040; at 32², lower at 1–4 spp on all four, but at 8 spp higher
-    // on studio (0.034 → 0.043), hence the hash from 8 samples on.
-    bool strata = filtered && pc.params.y <= FEW_SAMPLES;
+    // on studio (0.034 → 0.043), hence the hash from 5 samples on (8 the next count measured).
+    // Most of the 1-spp gain on Ward lobes is the cap's (the mean of 8 seeds at 64², 1 spp, venice
+    // Ward: hash 0.152, strata with the pixel's own cap 0.109, with the window's 0.077); a hash with
+    // the window's cap would let a pixel alone reach far into Ward's tail (the silhouettes above).
+    // The price: a pixel keeps its stratum from frame to frame, so where the filter's weights are
+    // uneven (silhouettes, creases, the image's edge) a pattern of period 7 stays in the image
+    // instead of noise.
     vec2 rot = KEY && (filtered || pc.params.z != 0u) ? vec2(hash_unit(seed), hash_unit(seed ^ 0x85ebca6bu)) : vec2(0.0);
     if (strata) {
         uvec2 u = uvec2(p) % uint(FILTER_WINDOW);

@@ -35,6 +35,8 @@ pub const LOD_BIAS: f32 = -2.0;
 /// The window's radius in pixels, `R` in `denoise.comp`: (2·3 + 1)² = 49 taps (`lobe.comp`'s
 /// `FILTER_WINDOW` 7 stratifies the lobe passes' shifts over it).
 pub const RADIUS: u32 = 3;
+// `lobe.comp` stratifies its shifts mod 7 (`FILTER_WINDOW`, with an `#error` of its own).
+const _: () = assert!(2 * RADIUS + 1 == 7);
 /// The pixels an invocation filters, a run along the pass's direction (`STRIP` in `denoise.comp`):
 /// it reads the `STRIP + 2 R` pixels under their windows once. Measured against the passes over the
 /// list with a pixel an invocation (session 16, the filter's time over the first lobe pass's in the

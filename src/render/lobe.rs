@@ -211,8 +211,10 @@ pub enum Into {
     /// The accumulation image, with the frame's sample set at every pixel.
     Accum,
     /// `Targets::rough` (cleared to unmarked zeros before the frame's first such pass), for the
-    /// filter (`denoise`), with the set shifted per pixel.
-    Rough,
+    /// filter (`denoise`), with the set shifted per pixel: up to `lobe.comp`'s `FEW_SAMPLES` (4)
+    /// stratified over the filter's window (`strata`), else by a hash per pixel (`strata` false:
+    /// always by the hash, as before session 17; a test compares).
+    Rough { strata: bool },
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -383,7 +385,12 @@ impl LobePass {
         )?;
         let mut push = rec.push;
         push.params = [index, samples, seed, m];
-        let mode = if into == Into::Accum { 0.0 } else { 1.0 };
+        // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always.
+        let mode = match into {
+            Into::Accum => 0.0,
+            Into::Rough { strata: true } => 1.0,
+            Into::Rough { strata: false } => 2.0,
+        };
         let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
         push.fparams = [bias, mode, counts[0], counts[1]];
         rec.dispatch_listed(pipeline, set, &push);

@@ -115,6 +115,9 @@ pub struct Renderer {
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
     /// false leaves them unfiltered (a test compares the two).
     pub denoise: bool,
+    /// Stratify the per-pixel shifts of a filtered lobe pass of up to 4 samples over the filter's
+    /// window (`glsl/lobe.comp`); false takes a hash per pixel at every count (a test compares).
+    pub stratified_shifts: bool,
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
@@ -163,6 +166,7 @@ impl Renderer {
             wide_lights: true,
             light_tiles: true,
             denoise: true,
+            stratified_shifts: true,
             seed: 0,
             build_in_background: None,
             passes: Some(passes),

@@ -365,7 +365,7 @@ impl Renderer {
                     targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
                 }
                 for (&(i, v), &f) in lobes.iter().zip(&filtered) {
-                    let into = if f { lobe::Into::Rough } else { lobe::Into::Accum };
+                    let into = if f { lobe::Into::Rough { strata: self.stratified_shifts } } else { lobe::Into::Accum };
                     let name = match tiles.iter().find(|t| t.0 == i) {
                         Some((_, rows)) => format!("lobe{i}[{},tiles {}]", v.tag(), rows.len()),
                         None => format!("lobe{i}[{}]", v.tag()),
