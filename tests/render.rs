@@ -834,6 +834,16 @@ fn lobe_pipelines_built_in_the_background_draw_the_same_image() {
     r.ctx.check_validation().unwrap();
 }
 
+/// A rough Ward lobe alone (α 0.5, albedo 0.8): the filter's case.
+fn rough_ward() -> Material {
+    Material {
+        diffuse: [0.0; 3],
+        normalization: Normalization::Ward,
+        symmetrize: false,
+        lobes: vec![common::lobe(0.8, 0.5, 0.5)],
+    }
+}
+
 /// The `key` estimator's filter of rough lobes (`render::denoise`): at 8 spp a rough lobe's estimate
 /// is the noise of 8 points over a lobe tens of degrees wide (9.5–11 % on venice and city in the 64²
 /// sweep, the 8 % missed), and its radiance is smooth in the normal on the scale of α. With
@@ -845,12 +855,7 @@ fn lobe_pipelines_built_in_the_background_draw_the_same_image() {
 #[test]
 fn filtering_rough_lobes_cuts_their_noise_and_keeps_converging() {
     let mut r = renderer();
-    let m = Material {
-        diffuse: [0.0; 3],
-        normalization: Normalization::Ward,
-        symmetrize: false,
-        lobes: vec![common::lobe(0.8, 0.5, 0.5)],
-    };
+    let m = rough_ward();
     let mut failures = Vec::new();
     for map in ["city.exr", "studio.exr"] {
         let e = env(map);
@@ -895,12 +900,7 @@ fn stratified_shifts_beat_a_hash_per_pixel_at_one_sample() {
     const SIZE_64: u32 = 64;
     const SEEDS: u32 = 4;
     let mut r = renderer();
-    let m = Material {
-        diffuse: [0.0; 3],
-        normalization: Normalization::Ward,
-        symmetrize: false,
-        lobes: vec![common::lobe(0.8, 0.5, 0.5)],
-    };
+    let m = rough_ward();
     let mesh = Mesh::sphere();
     let mut failures = Vec::new();
     for map in ["venice.exr", "city.exr"] {
