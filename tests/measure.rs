@@ -109,6 +109,8 @@ fn error_vs_time_quick_trends() {
     for f in &files {
         assert!(std::fs::metadata(f).map(|m| m.len() > 100).unwrap_or(false), "{} missing or empty", f.display());
     }
+    let md = std::fs::read_to_string(&files[2]).unwrap();
+    assert!(md.contains("Issue 10's goal, `key` within 8 %"), "{md}");
     let csv = std::fs::read_to_string(&files[0]).unwrap();
     assert_eq!(csv.lines().count(), 1 + plan.envs.len() * plan.materials.len() * 4 * plan.spps.len());
     let png = image::open(&files[1]).expect("the plot is a PNG");
