@@ -78,10 +78,10 @@ layout(set = 0, binding = 6) uniform sampler2D light_tex;
 layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 // The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
 // vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
-// A uniform block (`gpu::LIGHT_SET_UNIFORM_BYTES`, at most 512 samples): every invocation reads the
+// A uniform block (`gpu::LIGHT_SET_UNIFORM_BYTES`, at most 1024 samples or points): every invocation reads the
 // same sample at once, which llvmpipe loads once for all lanes; a storage buffer read inside the
 // sample loop goes lane by lane there.
-layout(std140, set = 0, binding = 8) uniform LightSamples { vec4 v[1024]; } light_set;
+layout(std140, set = 0, binding = 8) uniform LightSamples { vec4 v[2048]; } light_set;
 // The accumulation image, where a filtered pass (binding 2: `rough`) adds its light term.
 layout(set = 0, binding = 10, rgba32f) uniform image2D direct;
 

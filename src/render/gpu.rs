@@ -144,8 +144,10 @@ pub fn vec4(v: DVec3, w: f32) -> [f32; 4] {
 }
 
 /// The bytes of the lobe pass's uniform block of light samples or points (`lobe.comp`
-/// `LightSamples`: 1024 `vec4`, two per sample): Vulkan's guaranteed `maxUniformBufferRange`.
-pub const LIGHT_SET_UNIFORM_BYTES: usize = 16384;
+/// `LightSamples`: 2048 `vec4`, two per sample or point): 32 KiB, twice the `maxUniformBufferRange`
+/// every Vulkan device guarantees (lavapipe and desktop GPUs have 64 KiB or more, and
+/// `Renderer::new` refuses a device with less).
+pub const LIGHT_SET_UNIFORM_BYTES: usize = 32768;
 /// The most light samples or points the block holds.
 pub const LIGHT_SET_MAX: usize = LIGHT_SET_UNIFORM_BYTES / 32;
 const _: () = assert!(LIGHT_SET_MAX == crate::scene::keylight::tiles::MAX_BLOCK_POINTS);

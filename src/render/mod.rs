@@ -144,12 +144,15 @@ pub struct Renderer {
 impl Renderer {
     pub fn new(ctx: Context) -> Result<Renderer> {
         let range = ctx.device.limits.max_uniform_buffer_range as usize;
-        if range < gpu::MATERIAL_UNIFORM_BYTES {
-            return Err(Error::NoDevice(format!(
-                "{}: uniform buffers of {range} bytes; the material needs {}",
-                ctx.device.name,
-                gpu::MATERIAL_UNIFORM_BYTES
-            )));
+        for (what, needs) in
+            [("the material", gpu::MATERIAL_UNIFORM_BYTES), ("the key lights' points", gpu::LIGHT_SET_UNIFORM_BYTES)]
+        {
+            if range < needs {
+                return Err(Error::NoDevice(format!(
+                    "{}: uniform buffers of {range} bytes; {what} needs {needs}",
+                    ctx.device.name
+                )));
+            }
         }
         let passes = Passes::new(&ctx)?;
         let ring = match FrameRing::new(&ctx) {
