@@ -345,6 +345,13 @@ fn curve_timed(rows: &[Row], scene: &str, estimator: Estimator, time: fn(&Row) -
     c
 }
 
+/// The scenes of `rows`, in their order (a scene's rows are consecutive).
+fn scenes(rows: &[Row]) -> Vec<String> {
+    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
+    scenes.dedup();
+    scenes
+}
+
 /// Issue 10's error target for the default estimator at `fis`-8's GPU time.
 pub const GOAL_ERROR: f64 = 0.08;
 
@@ -353,8 +360,7 @@ pub const GOAL_ERROR: f64 = 0.08;
 /// `time` (its median frame, or its fastest: the frames' noise decides scenes within a tenth of a
 /// millisecond); and how many scenes there are.
 pub fn goal_count(rows: &[Row], time: fn(&Row) -> f64) -> (usize, usize) {
-    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
-    scenes.dedup();
+    let scenes = scenes(rows);
     let within = scenes
         .iter()
         .filter(|scene| {
@@ -395,8 +401,7 @@ pub fn error_at(curve: &[(u32, f64, f64)], ms: f64) -> Option<f64> {
 /// GPU time, `key`'s equal-error speed-up over each older estimator, the time `key` needs for 2 %,
 /// and the map's key-light decision; then the older estimators against `fis` 8 spp.
 pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, String)]) -> String {
-    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
-    scenes.dedup();
+    let scenes = scenes(rows);
     let mut s = format!(
         "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
          Error: relative L1 over the object. GPU ms: shading passes only (median of {2} frames, in rounds interleaving each scene's estimators and sample counts).\n\n",
@@ -472,8 +477,7 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
 
 /// The log–log plot: one line per scene and estimator, coloured by estimator.
 pub fn plot(rows: &[Row], device: &str) -> Result<Vec<u8>> {
-    let mut scenes: Vec<String> = rows.iter().map(Row::scene).collect();
-    scenes.dedup();
+    let scenes = scenes(rows);
     let mut series = Vec::new();
     for scene in &scenes {
         for e in Estimator::ALL {
