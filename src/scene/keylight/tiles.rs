@@ -11,8 +11,8 @@
 //! a fourth-order term, and the whole light is taken as points when `s ≤ r α` ([`QUADRATURE_RATIO`]
 //! `= r`): `|W| s⁴ ≤ |W| (r α)⁴`. `|W| s⁴ = 3 Σ|w| ρ⁴` is the region's absolute fourth moment, so the
 //! tiles of a light keep that bound, times [`TILE_BUDGET`], when their moments add up to no more:
-//! `Σ_t |W_t| s_t⁴ ≤ TILE_BUDGET |W| (r α)⁴`. The tile with the largest moment is split (at the middle of its longer side, in the
-//! plane tangent at the light) until the sum fits. A tile whose signs cancel (net weight under half
+//! `Σ_t |W_t| s_t⁴ ≤ TILE_BUDGET |W| (r α)⁴`. The tile with the largest moment is split (at the
+//! middle of its longer side, in the plane tangent at the light) until the sum fits. A tile whose signs cancel (net weight under half
 //! its `Σ|w|`) has points far off its texels and is always split; a tile of a single texel is cut into
 //! its quarters (the map is read texel by texel: the radiance is constant over a texel). A lobe whose
 //! tiles would take more points than it may ([`max_points`]) gets none (`None`: it keeps MIS).
