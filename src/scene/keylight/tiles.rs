@@ -31,9 +31,9 @@ use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 pub const MAX_TILE_POINTS: usize = 64;
 
 /// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`). 1024 since
-/// session 17 (512 before): studio's lamp as tiles for a lobe of α 0.02 takes 768 points, and that
-/// lobe's 8-spp error on the 64² sweep fell from 0.104 by MIS light samples to 0.022 (the mean of 4
-/// frames' seeds).
+/// session 17 (512 before): studio's lamp as tiles for a lobe of α 0.02 took 768 points (212 since
+/// session 18's [`TILE_BUDGET`]), and that lobe's 8-spp error on the 64² sweep fell from 0.104 by MIS
+/// light samples to 0.022 (the mean of 4 frames' seeds).
 pub const MAX_BLOCK_POINTS: usize = 1024;
 
 /// The most points a lobe's tiles may take. Without the per-pixel reach test every shaded pixel
