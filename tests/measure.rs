@@ -111,6 +111,10 @@ fn error_vs_time_quick_trends() {
     }
     let md = std::fs::read_to_string(&files[2]).unwrap();
     assert!(md.contains("Issue 10's goal, `key` within 8 %"), "{md}");
+    // The fixed costs of a timed pass, measured in the same run: three finite, non-negative numbers.
+    let fixed = md.lines().find(|l| l.starts_with("What a timed pass costs before any work")).expect("fixed costs");
+    let costs: Vec<f64> = fixed.split(" ms").filter_map(|p| p.rsplit(' ').next()?.parse().ok()).collect();
+    assert!(costs.len() == 3 && costs.iter().all(|c| c.is_finite() && *c >= 0.0), "{fixed}");
     let csv = std::fs::read_to_string(&files[0]).unwrap();
     assert_eq!(csv.lines().count(), 1 + plan.envs.len() * plan.materials.len() * 4 * plan.spps.len());
     let png = image::open(&files[1]).expect("the plot is a PNG");

@@ -6,7 +6,9 @@
 //! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
 //! (log–log: the error–time frontier of each estimator) and `error-vs-time.md` (the default `key`
 //! estimator's error at `fis`-8's GPU time, its equal-error speed-ups and time to 2 %, the maps'
-//! key-light decisions; the older estimators against `fis` 8 spp and the `fis` bias floor).
+//! key-light decisions, and what a timed pass costs before any work on the device, measured after
+//! the sweep: `render::peak::fixed_costs`; the older estimators against `fis` 8 spp and the `fis`
+//! bias floor).
 
 use std::path::{Path, PathBuf};
 
@@ -14,6 +16,7 @@ use crate::brdf::Material;
 use crate::error::{Error, Result};
 use crate::fsio::write_atomic;
 use crate::reference::{self, Image};
+use crate::render::peak::FixedCosts;
 use crate::render::{environment, Estimator, Renderer, Settings, View};
 use crate::scene::{Camera, Environment, Mesh};
 
@@ -189,6 +192,9 @@ pub fn cached_reference(
     save_image(&path, &im)?;
     Ok(im)
 }
+
+/// Frames over which the summary's fixed costs of a timed pass are measured (after the sweep).
+pub const FIXED_COST_FRAMES: usize = 15;
 
 /// Per map name, the `key` estimator's key-light decision (`KeyLightSummary::describe`).
 pub type Decisions = Vec<(String, String)>;
@@ -400,7 +406,7 @@ pub fn error_at(curve: &[(u32, f64, f64)], ms: f64) -> Option<f64> {
 /// The Markdown summary: per scene, `fis` at 8 spp against the default `key` estimator at the same
 /// GPU time, `key`'s equal-error speed-up over each older estimator, the time `key` needs for 2 %,
 /// and the map's key-light decision; then the older estimators against `fis` 8 spp.
-pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, String)]) -> String {
+pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, String)], fixed: &FixedCosts) -> String {
     let scenes = scenes(rows);
     let mut s = format!(
         "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
@@ -444,6 +450,10 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
     s.push_str(&format!(
         "\n**Issue 10's goal, `key` within {:.0} % at `fis`-8's GPU time: {by_median} of {n} scenes** by the medians above; {by_fastest} of {n} with each configuration's fastest frame instead.\n",
         GOAL_ERROR * 100.0
+    ));
+    s.push_str(&format!(
+        "\nWhat a timed pass costs before any work on this device, in the same run (`render::peak::fixed_costs`, median of {} frames): a timed region with nothing in it {:.3} ms, with one dispatch of nothing (and the barrier after it) {:.3} ms, with two {:.3} ms. At this size that is much of every frame's time: `fis` records one lobe dispatch, `key` one per lobe, and a lobe it filters two more (`render::denoise`).\n",
+        fixed.frames, fixed.empty, fixed.one_dispatch, fixed.two_dispatches
     ));
     s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more (or, not seen, where fis-8 takes longer than key's longest frame). A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");
     if !decisions.is_empty() {
@@ -506,10 +516,11 @@ pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) 
     super::require_maps(&plan.hdri, &plan.envs)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let (rows, decisions) = run(renderer, plan, out, progress)?;
+    let fixed = crate::render::peak::fixed_costs(renderer, FIXED_COST_FRAMES)?;
     let device = renderer.device_name().to_string();
     let files = vec![out.join("error-vs-time.csv"), out.join("error-vs-time.png"), out.join("error-vs-time.md")];
     // All three as one step: every temporary file is written before the first rename.
-    let (csv, png, md) = (csv(&rows), plot(&rows, &device)?, summary(&rows, plan, &device, &decisions));
+    let (csv, png, md) = (csv(&rows), plot(&rows, &device)?, summary(&rows, plan, &device, &decisions, &fixed));
     crate::fsio::write_all_atomic(&[(&files[0], csv.as_bytes()), (&files[1], &png), (&files[2], md.as_bytes())])?;
     Ok((rows, files))
 }

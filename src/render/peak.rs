@@ -1,14 +1,20 @@
 //! The device's arithmetic peak as `bench` states it: a compute pass of independent `vec4` fused
 //! multiply-adds (`glsl/peak.comp`), grown until one submission runs at least 20 ms, timed on the
 //! host around the submission and its wait (timestamps around this dispatch read near zero on
-//! lavapipe once a frame has been rendered; at 20 ms the submission's own cost is under 1 %). What the shading passes reach is quoted as a share of this.
+//! lavapipe once a frame has been rendered; at 20 ms the submission's own cost is under 1 %). What
+//! the shading passes reach is quoted as a share of this.
+//!
+//! And what a timed pass costs before any work ([`fixed_costs`]), which `report error-vs-time`
+//! states next to its small frames' times: the same pipeline with no rounds, one workgroup.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+use super::Renderer;
+use crate::brdf::{Material, Normalization};
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
-use crate::vk::{Buffer, Context};
+use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
 /// Rounds per invocation, and flops per round (`peak.comp`: 4 × 8 `vec4` FMAs, 4 lanes, 2 flops).
@@ -26,6 +32,46 @@ const OUT_VEC4S: u64 = 4096;
 
 pub struct PeakPass {
     pipeline: Pipeline,
+}
+
+/// A descriptor set of the pass's layout pointing at an output buffer of its own.
+struct Scratch {
+    out: Buffer,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+}
+
+impl Scratch {
+    fn new(ctx: &Context, pass: &PeakPass) -> Result<Scratch> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let out = Buffer::new(ctx, OUT_VEC4S * 16, usage, MemoryLocation::GpuOnly, "peak.out")?;
+        let pool = match descriptor::pool(ctx, 1, "peak.descriptors") {
+            Ok(p) => p,
+            Err(e) => {
+                out.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let mut scratch = Scratch { out, pool, set: vk::DescriptorSet::null() };
+        match descriptor::allocate(ctx, pool, pass.pipeline.set_layout) {
+            Ok(set) => {
+                descriptor::write(ctx, set, &[Binding::Storage(&scratch.out)]);
+                scratch.set = set;
+                Ok(scratch)
+            }
+            Err(e) => {
+                scratch.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    /// Frees both; the submissions that used them were waited on.
+    fn destroy(self, ctx: &Context) {
+        // SAFETY: no submission that uses the pool's set is pending (the caller waited).
+        unsafe { ctx.raw().destroy_descriptor_pool(self.pool, None) };
+        self.out.destroy(ctx);
+    }
 }
 
 impl PeakPass {
@@ -56,38 +102,99 @@ impl PeakPass {
     /// One dispatch of `groups` workgroups (a power of two, so rows of [`ROW`] hold them exactly):
     /// milliseconds from submission to completion.
     fn run(&self, ctx: &Context, groups: u32) -> Result<f64> {
-        let out = Buffer::new(
-            ctx,
-            OUT_VEC4S * 16,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuOnly,
-            "peak.out",
-        )?;
-        let mut pool = None;
-        let result = (|| -> Result<f64> {
-            let p = descriptor::pool(ctx, 1, "peak.descriptors")?;
-            pool = Some(p);
-            let set = descriptor::allocate(ctx, p, self.pipeline.set_layout)?;
-            descriptor::write(ctx, set, &[Binding::Storage(&out)]);
-            let push: Vec<u8> = [ITERATIONS.to_ne_bytes(), 0.999f32.to_ne_bytes(), 0.001f32.to_ne_bytes()].concat();
-            let start = std::time::Instant::now();
-            ctx.commands.run(&ctx.device, |cmd| {
-                self.pipeline.bind(ctx, cmd, set, &push);
-                // SAFETY: `cmd` is recording with the compute pipeline bound.
-                unsafe { ctx.raw().cmd_dispatch(cmd, groups.min(ROW), groups.div_ceil(ROW), 1) };
-                Ok(())
-            })?;
-            Ok(start.elapsed().as_secs_f64() * 1e3)
-        })();
-        if let Some(p) = pool {
-            // SAFETY: the submission was waited on (or never made).
-            unsafe { ctx.raw().destroy_descriptor_pool(p, None) };
-        }
-        out.destroy(ctx);
-        result
+        let scratch = Scratch::new(ctx, self)?;
+        let start = std::time::Instant::now();
+        let ran = ctx.commands.run(&ctx.device, |cmd| {
+            self.record(ctx, cmd, scratch.set, ITERATIONS, groups);
+            Ok(())
+        });
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        // The submission was waited on (or never made).
+        scratch.destroy(ctx);
+        ran.map(|_| ms)
+    }
+
+    /// Records one dispatch of `groups` workgroups of `iterations` rounds each.
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, set: vk::DescriptorSet, iterations: u32, groups: u32) {
+        let push: Vec<u8> = [iterations.to_ne_bytes(), 0.999f32.to_ne_bytes(), 0.001f32.to_ne_bytes()].concat();
+        self.pipeline.bind(ctx, cmd, set, &push);
+        // SAFETY: `cmd` is recording with the compute pipeline bound.
+        unsafe { ctx.raw().cmd_dispatch(cmd, groups.min(ROW), groups.div_ceil(ROW), 1) };
     }
 
     pub fn destroy(self, ctx: &Context) {
         self.pipeline.destroy(ctx);
     }
+}
+
+/// What a timed pass costs before any work, timed as the renderer times its passes
+/// (`Renderer::time`, the same timestamps): a timed region with nothing in it, one with one dispatch
+/// of one workgroup that does nothing (`peak.comp` with no rounds) followed by the barrier every pass
+/// records after its dispatch, and one with two of those; the median over the frames, ms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixedCosts {
+    pub frames: usize,
+    pub empty: f64,
+    pub one_dispatch: f64,
+    pub two_dispatches: f64,
+}
+
+/// [`FixedCosts`] over `frames` frames of `r` (at least one), after the frames in flight (whose
+/// times this drops).
+pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
+    const NAMES: [&str; 3] = ["fixed.empty", "fixed.one", "fixed.two"];
+    let pass = PeakPass::new(&r.ctx)?;
+    r.finish_frames()?;
+    r.take_finished();
+    let nothing = Material { diffuse: [0.0; 3], normalization: Normalization::Ward, symmetrize: false, lobes: vec![] };
+    let scratch = match Scratch::new(&r.ctx, &pass) {
+        Ok(s) => s,
+        Err(e) => {
+            pass.destroy(&r.ctx);
+            return Err(e);
+        }
+    };
+    let times = (|| -> Result<[Vec<f64>; 3]> {
+        let mut times = [Vec::new(), Vec::new(), Vec::new()];
+        for _ in 0..frames.max(1) {
+            r.begin_frame(&nothing)?;
+            let recorded = (|| -> Result<()> {
+                for (k, name) in NAMES.iter().enumerate() {
+                    r.time(name, |ctx, cmd| {
+                        for _ in 0..k {
+                            pass.record(ctx, cmd, scratch.set, 0, 1);
+                            barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
+                        }
+                        Ok(())
+                    })?;
+                }
+                Ok(())
+            })();
+            match recorded {
+                Ok(()) => r.submit_frame(None, None)?,
+                Err(e) => {
+                    r.abandon_frame()?;
+                    return Err(e);
+                }
+            }
+        }
+        r.finish_frames()?;
+        for f in r.take_finished() {
+            for t in f.timings {
+                if let Some(k) = NAMES.iter().position(|&n| n == t.name) {
+                    times[k].push(t.ms);
+                }
+            }
+        }
+        Ok(times)
+    })();
+    // Every frame that used them was waited on, or none was submitted (an error before the wait
+    // leaves frames in flight: wait for them first).
+    let waited = r.finish_frames();
+    scratch.destroy(&r.ctx);
+    pass.destroy(&r.ctx);
+    waited?;
+    let [empty, one, two] = times?.map(|t| crate::measure::stats(&t).0);
+    r.ctx.check_validation()?;
+    Ok(FixedCosts { frames: frames.max(1), empty, one_dispatch: one, two_dispatches: two })
 }
