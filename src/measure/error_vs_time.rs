@@ -452,7 +452,7 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
         GOAL_ERROR * 100.0
     ));
     s.push_str(&format!(
-        "\nWhat a timed pass costs before any work on this device, in the same run (`render::peak::fixed_costs`, median of {} frames): a timed region with nothing in it {:.3} ms, with one dispatch of nothing (and the barrier after it) {:.3} ms, with two {:.3} ms. At this size that is much of every frame's time: `fis` records one lobe dispatch, `key` one per lobe, and a lobe it filters two more (`render::denoise`).\n",
+        "\nWhat a timed pass costs before any work on this device, in the same run (`render::peak::fixed_costs`, median of {} frames): a timed region with nothing in it {:.3} ms, with one dispatch that does next to nothing (one workgroup; and the barrier after it) {:.3} ms, with two {:.3} ms. At this size that is much of every frame's time: `fis` records one lobe dispatch, `key` one per lobe, and a lobe it filters two more (`render::denoise`).\n",
         fixed.frames, fixed.empty, fixed.one_dispatch, fixed.two_dispatches
     ));
     s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more (or, not seen, where fis-8 takes longer than key's longest frame). A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");

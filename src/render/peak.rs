@@ -129,8 +129,9 @@ impl PeakPass {
 
 /// What a timed pass costs before any work, timed as the renderer times its passes
 /// (`Renderer::time`, the same timestamps): a timed region with nothing in it, one with one dispatch
-/// of one workgroup that does nothing (`peak.comp` with no rounds) followed by the barrier every pass
-/// records after its dispatch, and one with two of those; the median over the frames, ms.
+/// of one workgroup that does next to nothing (`peak.comp` with no rounds: each invocation writes one
+/// `vec4`) followed by the barrier every pass records after its dispatch, and one with two of those;
+/// the median over the frames, ms.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FixedCosts {
     pub frames: usize,
@@ -188,13 +189,20 @@ pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
         }
         Ok(times)
     })();
-    // Every frame that used them was waited on, or none was submitted (an error before the wait
-    // leaves frames in flight: wait for them first).
-    let waited = r.finish_frames();
+    // Freed once every frame that used them is done (an error before the wait leaves frames in
+    // flight: wait for them first; where even that fails they are left, not freed under the GPU).
+    r.finish_frames()?;
     scratch.destroy(&r.ctx);
     pass.destroy(&r.ctx);
-    waited?;
-    let [empty, one, two] = times?.map(|t| crate::measure::stats(&t).0);
+    let median = |mut t: Vec<f64>| {
+        t.sort_by(f64::total_cmp);
+        match t.len() {
+            0 => 0.0,
+            n if n % 2 == 1 => t[n / 2],
+            n => 0.5 * (t[n / 2 - 1] + t[n / 2]),
+        }
+    };
+    let [empty, one, two] = times?.map(median);
     r.ctx.check_validation()?;
     Ok(FixedCosts { frames: frames.max(1), empty, one_dispatch: one, two_dispatches: two })
 }
