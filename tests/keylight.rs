@@ -384,7 +384,7 @@ fn a_wide_lobe_sees_the_lights_as_their_quadrature_points() {
 /// Also: the reach test's allowance (`tiles::max_points`) lies between 64 and 1024 points and grows
 /// as the reach narrows.
 #[test]
-fn a_narrower_lobe_sees_the_lights_as_tiles_within_the_same_bound() {
+fn a_narrower_lobe_sees_the_lights_as_tiles_within_the_budgets_bound() {
     use brdf_shop::brdf::Normalization;
     use keylight::tiles::{max_points, narrowest_alpha, tile_points, MAX_BLOCK_POINTS, MAX_TILE_POINTS};
     let mut failed = Vec::new();

@@ -405,8 +405,15 @@ pub fn error_at(curve: &[(u32, f64, f64)], ms: f64) -> Option<f64> {
 
 /// The Markdown summary: per scene, `fis` at 8 spp against the default `key` estimator at the same
 /// GPU time, `key`'s equal-error speed-up over each older estimator, the time `key` needs for 2 %,
-/// and the map's key-light decision; then the older estimators against `fis` 8 spp.
-pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, String)], fixed: &FixedCosts) -> String {
+/// the goal's count, what a timed pass costs before any work (`fixed`: measured, or why not), and
+/// the map's key-light decision; then the older estimators against `fis` 8 spp.
+pub fn summary(
+    rows: &[Row],
+    plan: &Plan,
+    device: &str,
+    decisions: &[(String, String)],
+    fixed: &std::result::Result<FixedCosts, String>,
+) -> String {
     let scenes = scenes(rows);
     let mut s = format!(
         "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
@@ -451,10 +458,13 @@ pub fn summary(rows: &[Row], plan: &Plan, device: &str, decisions: &[(String, St
         "\n**Issue 10's goal, `key` within {:.0} % at `fis`-8's GPU time: {by_median} of {n} scenes** by the medians above; {by_fastest} of {n} with each configuration's fastest frame instead.\n",
         GOAL_ERROR * 100.0
     ));
-    s.push_str(&format!(
-        "\nWhat a timed pass costs before any work on this device, in the same run (`render::peak::fixed_costs`, median of {} frames): a timed region with nothing in it {:.3} ms, with one dispatch that does next to nothing (one workgroup; and the barrier after it) {:.3} ms, with two {:.3} ms. At this size that is much of every frame's time: `fis` records one lobe dispatch, `key` one per lobe, and a lobe it filters two more (`render::denoise`).\n",
-        fixed.frames, fixed.empty, fixed.one_dispatch, fixed.two_dispatches
-    ));
+    s.push_str(&match fixed {
+        Ok(f) => format!(
+            "\nWhat a timed pass costs before any work on this device, in the same run (`render::peak::fixed_costs`, median of {} frames): a timed region with nothing in it {:.3} ms, with one dispatch that does next to nothing (one workgroup; and the barrier after it) {:.3} ms, with two {:.3} ms. At this size that is much of every frame's time: `fis` records one lobe dispatch, `key` one per lobe, and a lobe it filters two more (`render::denoise`).\n",
+            f.frames, f.empty, f.one_dispatch, f.two_dispatches
+        ),
+        Err(e) => format!("\nWhat a timed pass costs before any work on this device could not be measured: {e}\n"),
+    });
     s.push_str("\n`key at that ms` interpolates key's error–time frontier (log–log) at fis-8's GPU time; `—` where key's cheapest frame costs more (or, not seen, where fis-8 takes longer than key's longest frame). A speed-up is the time an older estimator needs to reach key-8's error (interpolated along its curve) over key-8's time; `> N×` where it never does within the sweep (N: its longest run over key-8's time).\n\n");
     if !decisions.is_empty() {
         s.push_str("Key lights per map (`key` splits these off; a map without one gets no light term):\n\n");
@@ -516,7 +526,8 @@ pub fn report(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) 
     super::require_maps(&plan.hdri, &plan.envs)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let (rows, decisions) = run(renderer, plan, out, progress)?;
-    let fixed = crate::render::peak::fixed_costs(renderer, FIXED_COST_FRAMES)?;
+    // Measured after the sweep; a failure here is stated in the summary rather than losing the sweep.
+    let fixed = crate::render::peak::fixed_costs(renderer, FIXED_COST_FRAMES).map_err(|e| e.to_string());
     let device = renderer.device_name().to_string();
     let files = vec![out.join("error-vs-time.csv"), out.join("error-vs-time.png"), out.join("error-vs-time.md")];
     // All three as one step: every temporary file is written before the first rename.

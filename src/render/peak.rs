@@ -144,9 +144,9 @@ pub struct FixedCosts {
 /// times this drops).
 pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
     const NAMES: [&str; 3] = ["fixed.empty", "fixed.one", "fixed.two"];
-    let pass = PeakPass::new(&r.ctx)?;
     r.finish_frames()?;
     r.take_finished();
+    let pass = PeakPass::new(&r.ctx)?;
     let nothing = Material { diffuse: [0.0; 3], normalization: Normalization::Ward, symmetrize: false, lobes: vec![] };
     let scratch = match Scratch::new(&r.ctx, &pass) {
         Ok(s) => s,
@@ -174,7 +174,8 @@ pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
             match recorded {
                 Ok(()) => r.submit_frame(None, None)?,
                 Err(e) => {
-                    r.abandon_frame()?;
+                    // The recording's error is the one to report.
+                    let _ = r.abandon_frame();
                     return Err(e);
                 }
             }
@@ -190,19 +191,27 @@ pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
         Ok(times)
     })();
     // Freed once every frame that used them is done (an error before the wait leaves frames in
-    // flight: wait for them first; where even that fails they are left, not freed under the GPU).
-    r.finish_frames()?;
+    // flight: wait for them first).
+    if let Err(e) = r.finish_frames() {
+        // Left, not freed under the GPU; the first error is the one to report.
+        return Err(times.err().unwrap_or(e));
+    }
     scratch.destroy(&r.ctx);
     pass.destroy(&r.ctx);
+    let times = times?;
+    if let Some(k) = times.iter().position(|t| t.is_empty()) {
+        return Err(crate::Error::Validation(format!("no GPU time came back for {}", NAMES[k])));
+    }
     let median = |mut t: Vec<f64>| {
         t.sort_by(f64::total_cmp);
-        match t.len() {
-            0 => 0.0,
-            n if n % 2 == 1 => t[n / 2],
-            n => 0.5 * (t[n / 2 - 1] + t[n / 2]),
+        let n = t.len();
+        if n % 2 == 1 {
+            t[n / 2]
+        } else {
+            0.5 * (t[n / 2 - 1] + t[n / 2])
         }
     };
-    let [empty, one, two] = times?.map(median);
+    let [empty, one, two] = times.map(median);
     r.ctx.check_validation()?;
     Ok(FixedCosts { frames: frames.max(1), empty, one_dispatch: one, two_dispatches: two })
 }

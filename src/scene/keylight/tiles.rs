@@ -12,9 +12,9 @@
 //! `= r`): `|W| s⁴ ≤ |W| (r α)⁴`. `|W| s⁴ = 3 Σ|w| ρ⁴` is the region's absolute fourth moment, so the
 //! tiles of a light keep that bound, times [`TILE_BUDGET`], when their moments add up to no more:
 //! `Σ_t |W_t| s_t⁴ ≤ TILE_BUDGET |W| (r α)⁴`. The tile with the largest moment is split (at the
-//! middle of its longer side, in the plane tangent at the light) until the sum fits. A tile whose signs cancel (net weight under half
-//! its `Σ|w|`) has points far off its texels and is always split; a tile of a single texel is cut into
-//! its quarters (the map is read texel by texel: the radiance is constant over a texel). A lobe whose
+//! middle of its longer side, in the plane tangent at the light) until the sum fits. A tile whose
+//! signs cancel (net weight under half its `Σ|w|`) has points far off its texels and is always
+//! split; a tile of a single texel is cut into its quarters (the map is read texel by texel: the radiance is constant over a texel). A lobe whose
 //! tiles would take more points than it may ([`max_points`]) gets none (`None`: it keeps MIS).
 //! `tests/keylight.rs` checks the bias against the exact integral over the texels.
 //!
@@ -67,8 +67,8 @@ pub fn max_points(lights: &[KeyLight], reach: Option<(f64, f64)>) -> usize {
 /// four points measured 4.9 % of the largest value at `s = 0.8 α` (`QUADRATURE_RATIO`'s table), so
 /// the tiles' bias stays within 5 % of the largest value (`tests/keylight.rs`; measured worst 3.7 %,
 /// against 0.8 % at ½). What it buys, measured on the 64² sweep (session 18): studio's lamp for a
-/// Ward lobe of α 0.02 in 212 points instead of 768 (its 1-spp lobe pass 0.79 → 0.39 ms, its 8-spp
-/// error 0.0155 → 0.0157, 256 spp 0.0058 → 0.0061), and a Ward 0.05 × 0.3 lobe on studio sees the lamp
+/// Ward lobe of α 0.02 in 212 points instead of 768 (its 1-spp frame 0.76 → 0.39 ms, its 8-spp
+/// error 0.0155 → 0.0157, 256 spp 0.0058 → 0.0060), and a Ward 0.05 × 0.3 lobe on studio sees the lamp
 /// as 44 points instead of MIS light samples (8 spp: 0.138 → 0.081). The light term of a frame is
 /// this biased whatever its samples; the refinement frames (MIS) are not.
 pub const TILE_BUDGET: f64 = 8.0;
