@@ -31,8 +31,8 @@
 // do not look for the lights.
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
-// FILTERED (fparams.y 1, or 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the set is shifted per
-// pixel instead (at a few samples stratified over the filter's window), so each pixel's quadrature
+// FILTERED (fparams.y 1, or 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the
+// set is shifted per pixel instead (at a few samples stratified over the filter's window), so each pixel's quadrature
 // error is its own (and a window's pixels together sample the lobe evenly); the samples' sum goes into `rough`
 // (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
 // over neighbours of like normal, and the light term (points: no noise to filter) into the

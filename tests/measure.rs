@@ -97,9 +97,9 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
 
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
 /// below a third of the error at one sample per pixel — QMC on these scenes falls faster than
-/// 1/√N, which would give 1/√128 ≈ 0.09), and `key` improves to within issue 10's 2 %; on the sun map, `fis` at 8 spp beats `plain` at 8 spp on
-/// the medium and rough lobes; `key` is within issue 10's 8 % at 8 spp on every scene and, for the
-/// rough lobe, at 1 spp. Also writes and checks the CSV, plot and summary.
+/// 1/√N, which would give 1/√128 ≈ 0.09), and `key` improves to within issue 10's 2 %; on the sun
+/// map, `fis` at 8 spp beats `plain` at 8 spp on the medium and rough lobes; `key` is within issue
+/// 10's 8 % at 8 spp on every scene and, for the rough lobe, at 1 spp. Also writes and checks the CSV, plot and summary.
 #[test]
 fn error_vs_time_quick_trends() {
     let mut r = renderer();

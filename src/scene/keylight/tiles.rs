@@ -14,8 +14,9 @@
 //! `Σ_t |W_t| s_t⁴ ≤ TILE_BUDGET |W| (r α)⁴`. The tile with the largest moment is split (at the
 //! middle of its longer side, in the plane tangent at the light) until the sum fits. A tile whose
 //! signs cancel (net weight under half its `Σ|w|`) has points far off its texels and is always
-//! split; a tile of a single texel is cut into its quarters (the map is read texel by texel: the radiance is constant over a texel). A lobe whose
-//! tiles would take more points than it may ([`max_points`]) gets none (`None`: it keeps MIS).
+//! split; a tile of a single texel is cut into its quarters (the map is read texel by texel: the
+//! radiance is constant over a texel). A lobe whose tiles would take more points than it may
+//! ([`max_points`]) gets none (`None`: it keeps MIS).
 //! `tests/keylight.rs` checks the bias against the exact integral over the texels.
 //!
 //! Pure CPU, a few microseconds per lobe: made per frame, not cached.
