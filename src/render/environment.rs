@@ -107,14 +107,15 @@ pub struct GpuKeyLights {
     pub lights: Vec<keylight::KeyLight>,
     /// The wide lights beside them (`keylight::WideLights`), if the map has any.
     pub wide: Option<GpuWideLights>,
-    /// The tiles made so far (`keylight::tiles`), by lobe roughness and point allowance: a frame
-    /// asks for them per lobe, and an edit changes one lobe at a time.
-    tiles: RefCell<HashMap<(u64, usize), Tiles>>,
+    /// The tiles made so far (`keylight::tiles`), by lobe roughness, point allowance and whether
+    /// they cut the wide lights too: a frame asks for them per lobe, and an edit changes one lobe
+    /// at a time.
+    tiles: RefCell<HashMap<(u64, usize, bool), Tiles>>,
 }
 
 /// The wide lights on the GPU: the residual map without them (and without the key lights), and
 /// the key and wide lights' quadrature points together, for the lobes that see all of them as
-/// points.
+/// points or as tiles.
 pub struct GpuWideLights {
     pub residual: Image,
     pub points: Buffer,
@@ -122,26 +123,47 @@ pub struct GpuWideLights {
     pub count: u32,
     /// The wide lights, as detected.
     pub lights: Vec<keylight::KeyLight>,
+    /// The key lights and the wide lights, in that order (what `points` and wide tiles are made of).
+    pub all: Vec<keylight::KeyLight>,
+    /// [`cone_table`] of `all`, for the reach test of a lobe that sees them all as tiles; `None`
+    /// where they are more than the test's slots (`keylight::MAX_LIGHTS`, `lobe.comp`'s
+    /// `MAX_LIGHTS`): such a lobe takes no reach test.
+    pub cones: Option<Buffer>,
 }
 
 impl GpuWideLights {
     fn new(ctx: &Context, keys: &KeyLights, wide: &keylight::WideLights) -> Result<GpuWideLights> {
-        let residual = upload_texture(ctx, &wide.residual, "keylights.wide.residual")?;
         let all: Vec<keylight::KeyLight> = keys.lights.iter().chain(&wide.lights).cloned().collect();
-        match point_set(ctx, &keylight::point_table(&all), "keylights.wide.points") {
-            Ok(points) => {
-                Ok(GpuWideLights { residual, points, count: 4 * all.len() as u32, lights: wide.lights.clone() })
-            }
+        let residual = upload_texture(ctx, &wide.residual, "keylights.wide.residual")?;
+        let points = match point_set(ctx, &keylight::point_table(&all), "keylights.wide.points") {
+            Ok(points) => points,
             Err(e) => {
                 residual.destroy(ctx);
-                Err(e)
+                return Err(e);
             }
-        }
+        };
+        let cones = if all.len() <= keylight::MAX_LIGHTS {
+            match storage(ctx, &cone_table(&all), "keylights.wide.cones") {
+                Ok(c) => Some(c),
+                Err(e) => {
+                    residual.destroy(ctx);
+                    points.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        let count = 4 * all.len() as u32;
+        Ok(GpuWideLights { residual, points, count, lights: wide.lights.clone(), all, cones })
     }
 
     fn destroy(self, ctx: &Context) {
         self.residual.destroy(ctx);
         self.points.destroy(ctx);
+        if let Some(c) = self.cones {
+            c.destroy(ctx);
+        }
     }
 }
 
@@ -231,7 +253,7 @@ impl KeyLightSummary {
         if let Some(alpha) = self.wide_min_alpha() {
             let each: Vec<String> = self.wide.iter().map(describe_light).collect();
             line += &format!(
-                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both",
+                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and a narrower lobe that sees the key lights as tiles sees the wide lights as tiles too where those fit, over the map without both",
                 self.wide.len(),
                 self.wide_share * 100.0,
                 each.join("; ")
@@ -332,13 +354,19 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 
 impl GpuKeyLights {
     /// The rows of `keylight::tiles::tile_points` for a lobe of smaller roughness `alpha` and at most
-    /// `max_points` points, made once per map (at most `TILES_KEPT` kept).
-    pub fn tiles(&self, alpha: f64, max_points: usize) -> Tiles {
-        let key = (alpha.to_bits(), max_points);
+    /// `max_points` points, of the key lights or, with `wide`, of the key and wide lights together
+    /// (`None` on a map without wide lights), made once per map (at most `TILES_KEPT` kept).
+    pub fn tiles(&self, alpha: f64, max_points: usize, wide: bool) -> Tiles {
+        let lights = match (wide, &self.wide) {
+            (false, _) => &self.lights,
+            (true, Some(w)) => &w.all,
+            (true, None) => return None,
+        };
+        let key = (alpha.to_bits(), max_points, wide);
         if let Some(made) = self.tiles.borrow().get(&key) {
             return made.clone();
         }
-        let made = keylight::tiles::tile_points(&self.lights, alpha, max_points);
+        let made = keylight::tiles::tile_points(lights, alpha, max_points);
         let mut kept = self.tiles.borrow_mut();
         if kept.len() >= TILES_KEPT {
             kept.clear();

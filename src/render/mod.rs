@@ -112,6 +112,10 @@ pub struct Renderer {
     /// Let the `key` lobe passes of lobes too narrow for the lights' own points see them as tiles
     /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
     pub light_tiles: bool,
+    /// Let the `key` lobe passes that see the key lights as tiles take the map's wide lights as
+    /// tiles too, where those fit, and sample the residual without them; false keeps the wide
+    /// lights in their residual (a test compares the two).
+    pub wide_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
     /// false leaves them unfiltered (a test compares the two).
     pub denoise: bool,
@@ -168,6 +172,7 @@ impl Renderer {
             light_reach_test: true,
             wide_lights: true,
             light_tiles: true,
+            wide_tiles: true,
             denoise: true,
             stratified_shifts: true,
             seed: 0,

@@ -212,18 +212,28 @@ impl Renderer {
                 let pays = lights && lobe::reach_test_pays(material, l);
                 let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
                 let reach_test = self.light_reach_test && pays;
-                let tiled = match key_lights.filter(|_| !whole && self.light_tiles) {
-                    Some(k) => k
-                        .tiles(l.alpha_x.min(l.alpha_y), max_points(&k.lights, reach))
-                        .map(|rows| tiles.push((i as u32, rows)))
-                        .is_some(),
-                    None => false,
-                };
-                let points = whole || tiled;
+                let wide_lights = key_lights.and_then(|k| k.wide.as_ref()).filter(|_| self.wide_lights);
                 // A lobe that sees the wide lights as points too takes them off its residual.
-                let wide = self.wide_lights
-                    && points
-                    && key_lights.and_then(|k| k.wide.as_ref()).is_some_and(|w| fits(&w.lights));
+                let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
+                let mut tiled = false;
+                if let Some(k) = key_lights.filter(|_| !whole && self.light_tiles) {
+                    let alpha = l.alpha_x.min(l.alpha_y);
+                    // The key and wide lights together first, where the reach test (if it pays)
+                    // sees them all; their tiles take the wide lights off the residual too.
+                    if let Some(w) = wide_lights.filter(|w| self.wide_tiles && (!pays || w.cones.is_some())) {
+                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), true) {
+                            tiles.push((i as u32, rows));
+                            (tiled, wide) = (true, true);
+                        }
+                    }
+                    if !tiled {
+                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), false) {
+                            tiles.push((i as u32, rows));
+                            tiled = true;
+                        }
+                    }
+                }
+                let points = whole || tiled;
                 (
                     i as u32,
                     lobe::Variant {
@@ -378,7 +388,7 @@ impl Renderer {
                             material: material_buf,
                             halton,
                             light_samples: match (v.points, v.wide) {
-                                (true, true) => wide_points,
+                                (true, true) => tile_set(i).or(wide_points),
                                 (true, false) => tile_set(i).or(light_points),
                                 (false, _) => light_samples,
                             },
