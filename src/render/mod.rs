@@ -113,8 +113,9 @@ pub struct Renderer {
     /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
     pub light_tiles: bool,
     /// Let the `key` lobe passes that see the key lights as tiles take the map's wide lights as
-    /// tiles too, where those fit, and sample the residual without them; false keeps the wide
-    /// lights in their residual (a test compares the two).
+    /// tiles too, where those fit, and sample the residual without them, in frames of at least
+    /// [`lobe::WIDE_TILES_MIN_SPP`] samples; false keeps the wide lights in their residual (a test
+    /// compares the two).
     pub wide_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
     /// false leaves them unfiltered (a test compares the two).

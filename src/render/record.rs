@@ -220,7 +220,8 @@ impl Renderer {
                     let alpha = l.alpha_x.min(l.alpha_y);
                     // The key and wide lights together first, where the reach test (if it pays)
                     // sees them all; their tiles take the wide lights off the residual too.
-                    if let Some(w) = wide_lights.filter(|w| self.wide_tiles && (!pays || w.cones.is_some())) {
+                    let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
+                    if let Some(w) = wide_lights.filter(|w| wide_tiles && (!pays || w.cones.is_some())) {
                         if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), true) {
                             tiles.push((i as u32, rows));
                             (tiled, wide) = (true, true);
