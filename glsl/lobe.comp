@@ -23,8 +23,9 @@
 // texels and M_neg of their dark ringing) and the N samples of each component above, balance
 // heuristic over all of them: a sample ω adds F(ω) L_key cos θ / (M_set p_set + N Σ_c p_c), F the
 // whole lobe (brdf.glsl `lobe_value`), p_c each component's pdf.
-// POINTS (a lobe much wider than every light, `keylight::quadrature_fits`): light_set holds the
-// lights' four points each, vec4(direction, 0), vec4(power / 4, 0), and the light term is
+// POINTS (a lobe much wider than every light, `keylight::quadrature_fits`, or than the lights'
+// tiles, `keylight::tiles`): light_set holds the lights' (or tiles') four points each,
+// vec4(direction, 0), vec4(power / 4, 0), and the light term is
 // Σ F(ω) cos θ P, exact to second order in the light's size over the lobe's; no MIS, no light noise.
 // REACH_TEST (LIGHTS, a narrow lobe of one component, `lobe::Variant::reach`): a pixel whose lobe
 // cannot reach any light (`sees_lights`) skips the light term: no light samples, and its BRDF samples
@@ -72,7 +73,8 @@ layout(set = 0, binding = 3) uniform sampler2D env_tex;
 struct Group { vec4 neglog; vec4 cos_phi; vec4 sin_phi; vec4 valid; };
 layout(std430, set = 0, binding = 5) readonly buffer Halton { Group g[]; } halton;
 // LIGHTS: the lights' texels, rgb L_key and alpha the pdf over (u, v) (`GpuKeyLights::texels`), and
-// their cones; bound to stand-ins otherwise.
+// their cones (a `wide` variant's REACH_TEST reads the key and wide lights', `GpuWideLights::cones`);
+// bound to stand-ins otherwise.
 layout(set = 0, binding = 6) uniform sampler2D light_tex;
 // count: (lights, CDF entries, 0, 0); per light vec4(direction, cos extent), vec4(power rgb, extent).
 layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;

@@ -253,7 +253,7 @@ impl KeyLightSummary {
         if let Some(alpha) = self.wide_min_alpha() {
             let each: Vec<String> = self.wide.iter().map(describe_light).collect();
             line += &format!(
-                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe that sees the key lights as tiles sees the wide lights as tiles too where those fit, over the map without both",
+                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe sees the key and wide lights as tiles together where those fit (and its reach test, if it takes one, can hold them all), over the map without both",
                 self.wide.len(),
                 self.wide_share * 100.0,
                 each.join("; "),

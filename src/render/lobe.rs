@@ -55,11 +55,13 @@ pub struct Variant {
     /// With `lights`, a lobe much wider than every light (`keylight::quadrature_fits`): the lights
     /// are their quadrature points, evaluated exactly, and the BRDF samples read the residual only.
     pub points: bool,
-    /// With `points`, a lobe that sees the map's wide lights as points too (`keylight::WideLights`):
-    /// its points are the key and wide lights', and its BRDF samples read the map without both.
+    /// With `points`, a lobe that sees the map's wide lights as points or tiles too
+    /// (`keylight::WideLights`): its points are the key and wide lights' (or their tiles'), and its
+    /// BRDF samples read the map without both.
     pub wide: bool,
     /// With `lights`, a lobe of one component narrow enough that most pixels' lobes cannot reach a
-    /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe.comp` `sees_lights`).
+    /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe.comp` `sees_lights`);
+    /// with `wide`, the test reads the key and wide lights' cones (`GpuWideLights::cones`).
     pub reach: bool,
 }
 
@@ -67,8 +69,8 @@ pub struct Variant {
 /// so it is below `e^(−REACH²)` = 1.4·10⁻¹¹ of its peak.
 pub const REACH: f64 = 5.0;
 
-/// The fewest samples of a frame whose lobes that see the key lights as tiles see the map's wide
-/// lights as tiles too (`Renderer::wide_tiles`). Their points cost the same at any sample count and
+/// The fewest samples of a frame whose lobes that see the key lights as points or tiles (but the
+/// wide lights not as points) see the key and wide lights as tiles together (`Renderer::wide_tiles`). Their points cost the same at any sample count and
 /// take the wide lights' share of the residual's noise, which the samples would otherwise have to:
 /// measured on the 64² sweep's studio lobes (in-process, interleaved; the softbox beside the lamp),
 /// the error at equal time was the same or better from 4 samples on and better for all three lobes

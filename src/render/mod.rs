@@ -102,19 +102,21 @@ pub struct Renderer {
     /// Skip the faces a closed mesh hides from an eye outside it (`Mesh::hidden_faces`); the image
     /// is the same either way (tests compare the two).
     pub cull_hidden_faces: bool,
-    /// Let the `key` lobe passes of narrow lobes skip the key lights at pixels whose lobe cannot
-    /// reach them (`lobe::reach_test_pays`); the image is the same either way (a test compares).
+    /// Let the `key` lobe passes of narrow lobes skip the key lights (and the wide lights they see
+    /// as tiles) at pixels whose lobe cannot reach them (`lobe::reach_test_pays`); the image is the
+    /// same either way (a test compares).
     pub light_reach_test: bool,
-    /// Let the `key` lobe passes of lobes that see every key and wide light as points take the wide
-    /// lights off their residual map (`keylight::WideLights`); false leaves them in it (a test
-    /// compares the two).
+    /// Let the `key` lobe passes of lobes that see every key and wide light as points (or, with
+    /// `wide_tiles`, as tiles) take the wide lights off their residual map (`keylight::WideLights`);
+    /// false leaves them in it (a test compares the two).
     pub wide_lights: bool,
     /// Let the `key` lobe passes of lobes too narrow for the lights' own points see them as tiles
     /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
     pub light_tiles: bool,
-    /// Let the `key` lobe passes that see the key lights as tiles take the map's wide lights as
-    /// tiles too, where those fit, and sample the residual without them, in frames of at least
-    /// [`lobe::WIDE_TILES_MIN_SPP`] samples; false keeps the wide lights in their residual (a test
+    /// Let the `key` lobe passes that see the key lights as points or tiles but the wide lights not
+    /// as points take the key and wide lights as tiles together, where those fit, and sample the
+    /// residual without both, in frames of at least [`lobe::WIDE_TILES_MIN_SPP`] samples (with
+    /// `wide_lights` and `light_tiles` set); false keeps the wide lights in their residual (a test
     /// compares the two).
     pub wide_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);

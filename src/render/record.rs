@@ -216,10 +216,11 @@ impl Renderer {
                 // A lobe that sees the wide lights as points too takes them off its residual.
                 let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
                 let mut tiled = false;
-                if let Some(k) = key_lights.filter(|_| !whole && self.light_tiles) {
+                if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
                     let alpha = l.alpha_x.min(l.alpha_y);
-                    // The key and wide lights together first, where the reach test (if it pays)
-                    // sees them all; their tiles take the wide lights off the residual too.
+                    // The key and wide lights together first (also for a lobe that sees the key
+                    // lights as points: those are then their own one tile), where the reach test
+                    // (if it pays) sees them all; their tiles take the wide lights off the residual.
                     let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
                     if let Some(w) = wide_lights.filter(|w| wide_tiles && (!pays || w.cones.is_some())) {
                         if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), true) {
@@ -227,7 +228,7 @@ impl Renderer {
                             (tiled, wide) = (true, true);
                         }
                     }
-                    if !tiled {
+                    if !tiled && !whole {
                         if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), false) {
                             tiles.push((i as u32, rows));
                             tiled = true;

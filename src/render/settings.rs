@@ -19,8 +19,8 @@ pub enum Estimator {
     Mis,
     /// Issue 10's default: the map's key lights split off; each lobe pass integrates the residual map
     /// (prefiltered, a Hammersley set shifted per frame, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe
-    /// under the lights (light and BRDF samples, balance heuristic, or the lights' quadrature points
-    /// for a lobe much wider than them); the diffuse pass takes the residual's SH9
+    /// under the lights (light and BRDF samples, balance heuristic, or the quadrature points of the
+    /// lights or of their tiles for a lobe wider than those); the diffuse pass takes the residual's SH9
     /// and the lights as distant sources.
     Key,
 }

@@ -11,8 +11,9 @@
 //! the map's energy are left in the map (not worth a pass); at most [`MAX_LIGHTS`] are kept.
 //!
 //! Beside key lights, [`WideLights`] are found the same way in what is left of the map, at a lower
-//! threshold and a larger size (a studio's softbox); only lobes that see them as quadrature points
-//! take them off the map they sample.
+//! threshold and a larger size (a studio's softbox); only lobes that see them as quadrature points,
+//! or (in frames of enough samples, `render::lobe::WIDE_TILES_MIN_SPP`) as tiles, take them off the
+//! map they sample.
 //!
 //! Pure CPU, no GPU; owns no file I/O.
 
@@ -163,9 +164,10 @@ pub struct KeyLights {
 
 /// Wide lights: what is left of the map after the key lights is searched again at
 /// [`WIDE_THRESHOLD_OVER_MEAN`] for regions up to [`WIDE_MAX_SOLID_ANGLE`] (a studio's softbox, a
-/// bright window). Only lobes wide enough to see every key and wide light as quadrature points
-/// ([`quadrature_fits`] over both) take them: for those the wide lights leave the residual map
-/// they sample, whose hot spots would otherwise make their noise; every other lobe keeps them in its
+/// bright window). Lobes wide enough to see every key and wide light as quadrature points
+/// ([`quadrature_fits`] over both) take them, and (session 19, in frames of enough samples) lobes
+/// that see them all as tiles ([`tiles`]): for those the wide lights leave the residual map they
+/// sample, whose hot spots would otherwise make their noise; every other lobe keeps them in its
 /// residual map, where its own samples resolve them better than light samples would.
 #[derive(Clone, Debug)]
 pub struct WideLights {
