@@ -439,12 +439,7 @@ fn a_narrower_lobe_sees_the_key_and_wide_lights_as_tiles_within_the_budgets_boun
         let Some(wide) = &keys.wide else { continue };
         seen += 1;
         let all: Vec<keylight::KeyLight> = keys.lights.iter().chain(&wide.lights).cloned().collect();
-        let map: Vec<[f32; 3]> = env
-            .texels
-            .iter()
-            .zip(&wide.residual.texels)
-            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-            .collect();
+        let map = wide.light_map(env);
         let widest = all.iter().map(|l| l.spread).fold(0.0, f64::max) / keylight::QUADRATURE_RATIO;
         let narrowest = narrowest_alpha(&all, |_| MAX_BLOCK_POINTS).expect("some lobe fits");
         eprintln!("{}: key and wide lights as tiles from α = {narrowest:.4} to {widest:.4}", env.origin);

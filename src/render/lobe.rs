@@ -369,14 +369,9 @@ impl LobePass {
         let (mut cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
         // A lobe that sees the key and wide lights as tiles tests its reach to all of them.
         if variant.wide && variant.reach {
-            match keys.and_then(|k| k.wide.as_ref()).and_then(|w| w.cones.as_ref()) {
-                Some(c) => cones = c,
-                None => {
-                    return Err(crate::Error::Validation(
-                        "a wide-light lobe pass tests its reach without the wide lights' cones".into(),
-                    ))
-                }
-            }
+            cones = keys.and_then(|k| k.wide.as_ref()).and_then(|w| w.cones.as_ref()).ok_or_else(|| {
+                crate::Error::Validation("a wide-light lobe pass tests its reach without the wide lights' cones".into())
+            })?;
         }
         // The material's uniform buffer stands in (it is longer than the light set's block).
         let LightSet { buffer: samples_buf, offset, count: m, counts } = light_samples

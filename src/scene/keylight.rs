@@ -178,6 +178,13 @@ pub struct WideLights {
     pub share: f64,
 }
 
+impl WideLights {
+    /// The key and wide lights together as a map: `env − residual` (see [`KeyLights::light_map`]).
+    pub fn light_map(&self, env: &Environment) -> Vec<[f32; 3]> {
+        difference(env, &self.residual)
+    }
+}
+
 fn luminance(c: [f32; 3]) -> f64 {
     0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
 }
@@ -315,8 +322,13 @@ impl KeyLights {
     /// The lights as a map: `env − residual`, zero away from the lights and negative where a light's
     /// ring was darker than its background (the sampling tables of the key-light pass use `|L|`).
     pub fn light_map(&self, env: &Environment) -> Vec<[f32; 3]> {
-        env.texels.iter().zip(&self.residual.texels).map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]]).collect()
+        difference(env, &self.residual)
     }
+}
+
+/// `env − residual`, texel by texel.
+fn difference(env: &Environment, residual: &Environment) -> Vec<[f32; 3]> {
+    env.texels.iter().zip(&residual.texels).map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]]).collect()
 }
 
 /// Finds the key lights of `env` (see the module note), and beside them the map's wide lights. A
