@@ -16,13 +16,21 @@ layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
 layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
 layout(std430, set = 0, binding = 2) buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
+// The same for the 2 × 2 blocks of pixels with any pixel listed, each by its first listed pixel
+// (in the order (0, 0), (1, 0), (0, 1), (1, 1)): the pixel whose samples a sparse filtered lobe
+// pass takes for the block (`denoise::sparse`).
+layout(std430, set = 0, binding = 3) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
 
-void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+bool listed_at(ivec2 p) {
     vec3 wo;
     Frame f;
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    bool listed = inside(p) && shaded(imageLoad(gpos, q), imageLoad(gnrm, q).xyz, f, wo);
+    return inside(p) && shaded(imageLoad(gpos, q), imageLoad(gnrm, q).xyz, f, wo);
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    bool listed = listed_at(p);
     // One atomic per subgroup: its listed lanes take consecutive places.
     uvec4 ballot = subgroupBallot(listed);
     uint n = subgroupBallotBitCount(ballot);
@@ -33,4 +41,23 @@ void main() {
     }
     base = subgroupBroadcastFirst(base);
     if (listed) pixels.at[base + subgroupBallotExclusiveBitCount(ballot)] = uint(p.x) | (uint(p.y) << 16);
+
+    // The block of which p is the first pixel (p even): its representative.
+    ivec2 rep = ivec2(-1);
+    if ((p.x & 1) == 0 && (p.y & 1) == 0) {
+        for (int k = 3; k >= 0; k--) {
+            ivec2 r = p + ivec2(k & 1, k >> 1);
+            if (k == 0 ? listed : listed_at(r)) rep = r;
+        }
+    }
+    bool block = rep.x >= 0;
+    ballot = subgroupBallot(block);
+    n = subgroupBallotBitCount(ballot);
+    base = 0u;
+    if (subgroupElect() && n > 0u) {
+        base = atomicAdd(blocks.count, n);
+        atomicMax(blocks.groups[0], (base + n + 63u) / 64u);
+    }
+    base = subgroupBroadcastFirst(base);
+    if (block) blocks.at[base + subgroupBallotExclusiveBitCount(ballot)] = uint(rep.x) | (uint(rep.y) << 16);
 }

@@ -47,6 +47,8 @@
 #endif
 // The most samples whose per-pixel shifts are stratified over that window (below).
 #define FEW_SAMPLES 4u
+// The sparse filter's window in blocks (denoise.comp's sparse pass): the strata below are mod 3.
+#define SPARSE_WINDOW 3
 #define PIXELS_BINDING 9
 #include "pass.glsl"
 // Over the list of shaded pixels (compact.comp).
@@ -536,8 +538,10 @@ void main() {
     bool filtered = pc.fparams.y > 0.5;
     uint seed = hash_u32(pc.params.z);
     // fparams.y 2: filtered with a hash per pixel at every count (`Renderer::stratified_shifts` off).
+    // fparams.y 3: sparse, one pixel a 2 × 2 block (the blocks' list), into `cells`.
+    bool sparse = pc.fparams.y > 2.5;
     bool strata = filtered && pc.fparams.y < 1.5 && pc.params.y <= FEW_SAMPLES;
-    if (filtered && !strata) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
+    if (filtered && !strata && !sparse) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
     // Up to FEW_SAMPLES samples, the shifts are stratified over the filter's window of W × W
     // pixels: pixel p takes the stratum M (p mod W) of the W × W grid over [0, 1)², M = (5 1; 1 2),
     // invertible mod 7, so every window holds each stratum once (its W² sets together: the N-point
@@ -560,11 +564,18 @@ void main() {
     // uneven (silhouettes, creases, the image's edge) a pattern of period 7 stays in the image
     // instead of noise.
     vec2 rot = KEY && (filtered || pc.params.z != 0u) ? vec2(hash_unit(seed), hash_unit(seed ^ 0x85ebca6bu)) : vec2(0.0);
-    if (strata) {
+    if (sparse) {
+        // Block c = p / 2 takes the stratum s = (c.x + 3 c.y) mod 9 of a 3 × 3 grid: every 3 × 3
+        // window of blocks holds each stratum once.
+        uvec2 c = uvec2(p) / 2u;
+        uint s = (c.x + 3u * c.y) % 9u;
+        rot = (vec2(float(s % 3u), float(s / 3u)) + rot) / float(SPARSE_WINDOW);
+    } else if (strata) {
         uvec2 u = uvec2(p) % uint(FILTER_WINDOW);
         rot = (vec2(float((5u * u.x + u.y) % 7u), float((u.x + 2u * u.y) % 7u)) + rot) / float(FILTER_WINDOW);
     }
-    if (filtered) g_x1_max = 1.0 - 0.5 / ((strata ? float(FILTER_WINDOW) : 1.0) * float(pc.params.y));
+    float window = sparse ? float(SPARSE_WINDOW) : strata ? float(FILTER_WINDOW) : 1.0;
+    if (filtered) g_x1_max = 1.0 - 0.5 / (window * float(pc.params.y));
     float n = float(pc.params.y);
     float omega_texel = (2.0 * PI / float(pc.size.z)) * (PI / float(pc.size.w));
     float half_sym = SYM ? 0.5 : 1.0;
@@ -576,6 +587,21 @@ void main() {
     bool lit = LIGHTS && (!REACH_TEST || sees_lights(f, l.shape, b));
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);
+    if (sparse) {
+        // The block's samples into `cells` (binding 2), its light term into `cells_light` (binding
+        // 10): the filter averages the first and interpolates the second.
+        ivec2 c = p / 2;
+        vec4 acc = imageLoad(accum, c);
+        acc.rgb += l.albedo.rgb * (half_sym * sum / n);
+        acc.a = normal_tag(f.n);
+        imageStore(accum, c, acc);
+        if (LIGHTS) {
+            vec4 a = imageLoad(direct, c);
+            a.rgb += l.albedo.rgb * g_light_sum;
+            imageStore(direct, c, a);
+        }
+        return;
+    }
     vec4 acc = imageLoad(accum, p);
     if (filtered) {
         // Only the samples' noisy sum goes through the filter; the light term (the lights' points:

@@ -10,8 +10,12 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 3] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
+const BINDINGS: [vk::DescriptorType; 4] = [
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
+];
 
 /// Invocations per group of the passes dispatched over the list (their `local_size_x`).
 pub const GROUP: u32 = 64;
@@ -22,16 +26,16 @@ pub const HEADER: u64 = 16;
 /// Where in the list buffer the indirect dispatch's groups are.
 pub const GROUPS_OFFSET: u64 = 4;
 
-/// The list buffer for a `width` × `height` view: the header and one `u32` per pixel.
-pub fn list_buffer(ctx: &Context, width: u32, height: u32) -> Result<Buffer> {
+/// A list buffer of `entries` entries at most: the header and one `u32` an entry.
+pub fn list_buffer(ctx: &Context, entries: u64, name: &str) -> Result<Buffer> {
     Buffer::new(
         ctx,
-        HEADER + 4 * u64::from(width) * u64::from(height),
+        HEADER + 4 * entries,
         vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::INDIRECT_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST,
         gpu_allocator::MemoryLocation::GpuOnly,
-        "pixels",
+        name,
     )
 }
 
@@ -64,6 +68,7 @@ impl CompactPass {
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::Storage(&t.pixels),
+                Binding::Storage(&t.blocks),
             ],
         )?;
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
@@ -71,7 +76,10 @@ impl CompactPass {
         let header: [u32; 4] = [0, 0, 1, 1];
         // SAFETY: `cmd` is recording; the buffer is live and has TRANSFER_DST usage; 16 bytes, a
         // multiple of 4 at offset 0.
-        unsafe { ctx.raw().cmd_update_buffer(cmd, t.pixels.raw, 0, bytemuck::cast_slice(&header)) };
+        unsafe {
+            ctx.raw().cmd_update_buffer(cmd, t.pixels.raw, 0, bytemuck::cast_slice(&header));
+            ctx.raw().cmd_update_buffer(cmd, t.blocks.raw, 0, bytemuck::cast_slice(&header));
+        }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
         self.pipeline.bind(ctx, cmd, set, bytemuck::bytes_of(&rec.push));
         // SAFETY: `cmd` is recording with the compute pipeline bound.

@@ -229,6 +229,10 @@ pub enum Into {
     /// stratified over the filter's window (`strata`), else by a hash per pixel (`strata` false:
     /// always by the hash, as before session 17; a test compares).
     Rough { strata: bool },
+    /// `Targets::cells`, one sample set per 2 × 2 block, its light term with it (`denoise::sparse`):
+    /// the pass runs over the blocks' list, at their first shaded pixel, the shifts stratified over
+    /// the sparse filter's window of 3 × 3 blocks.
+    Cells,
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -390,7 +394,11 @@ impl LobePass {
             &[
                 Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(if into == Into::Accum { t.accum.view } else { t.rough.view }),
+                Binding::StorageImage(match into {
+                    Into::Accum => t.accum.view,
+                    Into::Rough { .. } => t.rough.view,
+                    Into::Cells => t.cells.view,
+                }),
                 // `key` reads its residual within the nearest mip level (`environment::KEY_MIPMAP`).
                 Binding::Sampled(residual.view, if variant.key { env.key_sampler } else { env.sampler }),
                 Binding::Storage(material),
@@ -398,22 +406,26 @@ impl LobePass {
                 Binding::Sampled(texels.view, env.sampler),
                 Binding::Storage(cones),
                 Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
-                Binding::Storage(&t.pixels),
+                Binding::Storage(if into == Into::Cells { &t.blocks } else { &t.pixels }),
                 // A filtered pass's light term (read only by those).
-                Binding::StorageImage(t.accum.view),
+                Binding::StorageImage(if into == Into::Cells { t.cells_light.view } else { t.accum.view }),
             ],
         )?;
         let mut push = rec.push;
+        // A block's pixel takes at least one vector of 4 samples (fewer cost as much on llvmpipe):
+        // a block of 4 pixels, so 1 sample a pixel on average.
+        let samples = if into == Into::Cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
         push.params = [index, samples, seed, m];
         // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always.
         let mode = match into {
             Into::Accum => 0.0,
             Into::Rough { strata: true } => 1.0,
             Into::Rough { strata: false } => 2.0,
+            Into::Cells => 3.0,
         };
         let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
         push.fparams = [bias, mode, counts[0], counts[1]];
-        rec.dispatch_listed(pipeline, set, &push);
+        rec.dispatch_over(if into == Into::Cells { &t.blocks } else { &t.pixels }, pipeline, set, &push);
         Ok(())
     }
 

@@ -125,6 +125,9 @@ pub struct Renderer {
     /// Stratify the per-pixel shifts of a filtered lobe pass of up to 4 samples over the filter's
     /// window (`glsl/lobe.comp`); false takes a hash per pixel at every count (a test compares).
     pub stratified_shifts: bool,
+    /// Let frames of up to [`denoise::SPARSE_MAX_SPP`] samples sample the filtered lobes once per
+    /// 2 × 2 block of pixels (`denoise::sparse`); false samples every pixel (a test compares).
+    pub sparse_filter: bool,
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
@@ -177,6 +180,7 @@ impl Renderer {
             light_tiles: true,
             wide_tiles: true,
             denoise: true,
+            sparse_filter: true,
             stratified_shifts: true,
             seed: 0,
             build_in_background: None,

@@ -17,7 +17,7 @@ use crate::scene::keylight::tiles::max_points;
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
-use crate::vk::{barrier, Context};
+use crate::vk::{barrier, Buffer, Context};
 
 /// How many sizes of targets a view keeps: the full size and two preview steps (the editor's
 /// preview may change its step without dropping the full size's G-buffer).
@@ -64,10 +64,15 @@ impl Recording<'_> {
     /// Dispatches groups of [`compact::GROUP`] over the targets' list of shaded pixels (as many as
     /// `compact.comp` wrote into its header), then orders the accumulation image as [`Self::dispatch`].
     pub fn dispatch_listed(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+        self.dispatch_over(&self.targets.pixels, pipeline, set, push);
+    }
+
+    /// The same over `list`, the targets' list of pixels or of blocks (`compact.comp` writes both).
+    pub fn dispatch_over(&self, list: &Buffer, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
         pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
         // SAFETY: `cmd` is recording with a compute pipeline bound; the list buffer has INDIRECT_BUFFER
         // usage and its header, written by the compact pass of this G-buffer, holds the groups.
-        unsafe { self.ctx.raw().cmd_dispatch_indirect(self.cmd, self.targets.pixels.raw, compact::GROUPS_OFFSET) };
+        unsafe { self.ctx.raw().cmd_dispatch_indirect(self.cmd, list.raw, compact::GROUPS_OFFSET) };
         crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 }
@@ -372,12 +377,24 @@ impl Renderer {
                         l.alpha_x.min(l.alpha_y)
                     })
                     .fold(f64::INFINITY, f64::min);
+                // Sparse while the view holds at most `SPARSE_MAX_SPP` samples: a progressive
+                // refinement's later frames sample every pixel, so that their mean converges.
+                let sparse = self.sparse_filter && denoise::sparse(offset + settings.spp, w, h);
                 if min_alpha.is_finite() {
                     // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.
-                    targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                    if sparse {
+                        targets.cells.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                        targets.cells_light.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                    } else {
+                        targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                    }
                 }
                 for (&(i, v), &f) in lobes.iter().zip(&filtered) {
-                    let into = if f { lobe::Into::Rough { strata: self.stratified_shifts } } else { lobe::Into::Accum };
+                    let into = match (f, sparse) {
+                        (false, _) => lobe::Into::Accum,
+                        (true, true) => lobe::Into::Cells,
+                        (true, false) => lobe::Into::Rough { strata: self.stratified_shifts },
+                    };
                     let name = match tiles.iter().find(|t| t.0 == i) {
                         Some((_, rows)) => format!("lobe{i}[{},tiles {}]", v.tag(), rows.len()),
                         None => format!("lobe{i}[{}]", v.tag()),
@@ -400,7 +417,8 @@ impl Renderer {
                     })?;
                 }
                 if min_alpha.is_finite() {
-                    ts.time(ctx, cmd, "denoise", || passes.denoise.record(&rec, min_alpha, settings.spp))?;
+                    let name = if sparse { "denoise[sparse]" } else { "denoise" };
+                    ts.time(ctx, cmd, name, || passes.denoise.record(&rec, min_alpha, settings.spp, sparse))?;
                 }
             }
         }

@@ -23,9 +23,16 @@ pub struct Targets {
     /// normal (`denoise`), and the filter's intermediate image.
     pub rough: Image,
     pub mid: Image,
+    /// A sparse filtered frame's samples (`denoise::sparse`): one texel per 2 × 2 block of pixels.
+    pub cells: Image,
+    /// Their light terms (the lights' points), one texel a block, interpolated by the filter.
+    pub cells_light: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
     /// run over it).
     pub pixels: Buffer,
+    /// The 2 × 2 blocks with a shaded pixel, each by its first shaded pixel (`compact`): the sparse
+    /// filtered lobe passes run over it.
+    pub blocks: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
     /// `accum` holds an image (a view was recorded into it, or it was cleared for a view waiting
@@ -40,7 +47,7 @@ impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
         let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
         let mut made: Vec<Image> = Vec::new();
-        let built = (|| -> Result<Buffer> {
+        let built = (|| -> Result<(Buffer, Buffer)> {
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.position")?);
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
             made.push(Image::new(
@@ -61,9 +68,33 @@ impl Targets {
             made.push(rgba(src, "refinement.sum")?);
             made.push(rgba(dst, "rough")?);
             made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
-            super::compact::list_buffer(ctx, width, height)
+            let half = (width.div_ceil(2), height.div_ceil(2));
+            made.push(Image::new(
+                ctx,
+                half,
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | dst,
+                "rough.cells",
+            )?);
+            made.push(Image::new(
+                ctx,
+                half,
+                vk::Format::R32G32B32A32_SFLOAT,
+                1,
+                vk::ImageUsageFlags::STORAGE | dst,
+                "rough.cells_light",
+            )?);
+            let pixels = super::compact::list_buffer(ctx, u64::from(width) * u64::from(height), "pixels")?;
+            match super::compact::list_buffer(ctx, u64::from(half.0) * u64::from(half.1), "blocks") {
+                Ok(blocks) => Ok((pixels, blocks)),
+                Err(e) => {
+                    pixels.destroy(ctx);
+                    Err(e)
+                }
+            }
         })();
-        let pixels = match built {
+        let (pixels, blocks) = match built {
             Ok(b) => b,
             Err(e) => {
                 for i in made {
@@ -73,7 +104,7 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("seven images were made");
+        let mut next = || it.next().expect("nine images were made");
         Ok(Targets {
             width,
             height,
@@ -84,7 +115,10 @@ impl Targets {
             sum: next(),
             rough: next(),
             mid: next(),
+            cells: next(),
+            cells_light: next(),
             pixels,
+            blocks,
             gbuffer_of: None,
             drawn: false,
         })
@@ -97,9 +131,20 @@ impl Targets {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        for i in [self.position, self.normal, self.depth, self.accum, self.sum, self.rough, self.mid] {
+        for i in [
+            self.position,
+            self.normal,
+            self.depth,
+            self.accum,
+            self.sum,
+            self.rough,
+            self.mid,
+            self.cells,
+            self.cells_light,
+        ] {
             i.destroy(ctx);
         }
         self.pixels.destroy(ctx);
+        self.blocks.destroy(ctx);
     }
 }

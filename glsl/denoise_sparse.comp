@@ -1,0 +1,112 @@
+#version 460
+// The sparse form of the `key` estimator's filter of its rough lobes (issue 10; `render/denoise.rs`,
+// `denoise::sparse`; the dense form and the weights: denoise.comp). Their lobe passes took one
+// sample set per 2 × 2 block of pixels, at the block's first shaded pixel, and wrote its sum with
+// the lobe's light term into `cells` (one texel a block), marked with that pixel's normal.
+#extension GL_GOOGLE_include_directive : require
+#include "pass.glsl"
+#define R 3
+// Over the blocks (`denoise::sparse_groups`).
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D cells;
+layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
+layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
+layout(set = 0, binding = 3, rgba32f) readonly uniform image2D gpos;
+layout(set = 0, binding = 4, rgba32f) readonly uniform image2D gnrm;
+// fparams.x: log2(e) / σ².
+
+// The normal of a tag (`normal_tag` in lobe.comp: 1 + the octahedral code of the normal, 11 bits a
+// coordinate, an integer a float holds exactly).
+vec3 tag_normal(float tag) {
+    uint code = uint(tag - 1.0);
+    vec2 e = vec2(float(code >> 11), float(code & 2047u)) * (2.0 / 2047.0) - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(n);
+}
+
+// Each shaded pixel p gets the normal-weighted mean of the blocks
+// within R pixels of it along each axis (a block at 2 c): 3 × 3 blocks for a pixel of even
+// coordinates, 4 along an odd one. An invocation takes one block's four pixels, whose windows
+// together span its 4 × 4 neighbours, read once. The pixel's own block is always marked (its list
+// holds every block with a shaded pixel); where every weight underflows, its value is the pixel's.
+// Pixel p's normal, and whether it is shaded (`shaded` in pass.glsl without the frame: the mesh,
+// facing the eye).
+bool pixel_normal(ivec2 p, out vec3 n) {
+    ivec2 q = min(p, ivec2(pc.size.xy) - 1);
+    vec4 P = imageLoad(gpos, q);
+    n = normalize(imageLoad(gnrm, q).xyz);
+    return inside(p) && P.w >= 0.5 && dot(n, pc.eye.xyz - P.xyz) > 0.0;
+}
+
+// One block's part in a pixel's sums: its value t (rgb) at normal weight w in `sum` if the block is
+// within the pixel's window; its light term L at w times the bilinear weight `lin` in `light`.
+void add(vec3 t, vec3 L, float w, bool within, float lin, inout vec4 sum, inout vec4 light) {
+    if (within) sum += w * vec4(t, 1.0);
+    light += (w * lin) * vec4(L, 1.0);
+}
+
+// Adds pixel p's means (sum.rgb / sum.a and light.rgb / light.a; its own block's values where every
+// weight underflowed).
+void finish(ivec2 p, bool shaded, vec4 sum, vec4 light, vec3 own, vec3 own_light) {
+    if (!shaded) return;
+    vec4 acc = imageLoad(accum, p);
+    acc.rgb += sum.a > 0.0 ? sum.rgb / sum.a : own;
+    acc.rgb += light.a > 0.0 ? light.rgb / light.a : own_light;
+    imageStore(accum, p, acc);
+}
+
+// The sums of a block's four pixels p … p + (1, 1) over their windows, added to the image.
+void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec3 n3, bool s0, bool s1, bool s2,
+                  bool s3) {
+    float k_p = pc.fparams.x;
+    // Weighted sums (rgb) and weights (a) of the four pixels; the pixel (1, 0) has an odd x, so its
+    // window holds a fourth column of blocks, and so on.
+    vec4 a0 = vec4(0.0), a1 = vec4(0.0), a2 = vec4(0.0), a3 = vec4(0.0);
+    vec4 l0 = vec4(0.0), l1 = vec4(0.0), l2 = vec4(0.0), l3 = vec4(0.0);
+    vec3 own = vec3(0.0), own_light = vec3(0.0);
+    for (int j = 0; j < 4; j++) {
+        for (int i = 0; i < 4; i++) {
+            ivec2 q = b + ivec2(i - 1, j - 1);
+            bool on = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, blocks));
+            ivec2 qc = clamp(q, ivec2(0), blocks - 1);
+            vec4 t = imageLoad(cells, qc);
+            // The light terms of the 2 × 2 blocks b … b + 1, interpolated bilinearly: a pixel of
+            // even coordinate sits on its block, an odd one halfway to the next.
+            bool near = i >= 1 && i <= 2 && j >= 1 && j <= 2;
+            vec3 L = near ? imageLoad(cells_light, qc).rgb : vec3(0.0);
+            if (i == 1 && j == 1) {
+                own = t.rgb;
+                own_light = L;
+            }
+            if (!on || t.a < 0.5) continue;
+            vec3 nq = tag_normal(t.a);
+            float w0 = exp2((dot(n0, nq) - 1.0) * k_p), w1 = exp2((dot(n1, nq) - 1.0) * k_p);
+            float w2 = exp2((dot(n2, nq) - 1.0) * k_p), w3 = exp2((dot(n3, nq) - 1.0) * k_p);
+            float x_even = i == 1 ? 1.0 : 0.0, y_even = j == 1 ? 1.0 : 0.0;
+            float x_odd = near ? 0.5 : 0.0, y_odd = near ? 0.5 : 0.0;
+            // Along an even coordinate the fourth block is 4 pixels away: outside the window.
+            add(t.rgb, L, w0, i < 3 && j < 3, x_even * y_even, a0, l0);
+            add(t.rgb, L, w1, j < 3, x_odd * y_even, a1, l1);
+            add(t.rgb, L, w2, i < 3, x_even * y_odd, a2, l2);
+            add(t.rgb, L, w3, true, x_odd * y_odd, a3, l3);
+        }
+    }
+    finish(p, s0, a0, l0, own, own_light);
+    finish(p + ivec2(1, 0), s1, a1, l1, own, own_light);
+    finish(p + ivec2(0, 1), s2, a2, l2, own, own_light);
+    finish(p + ivec2(1, 1), s3, a3, l3, own, own_light);
+}
+
+void main() {
+    ivec2 b = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 blocks = ivec2((pc.size.xy + 1u) / 2u);
+    if (b.x >= blocks.x || b.y >= blocks.y) return;
+    ivec2 p = 2 * b;
+    vec3 n0, n1, n2, n3;
+    bool s0 = pixel_normal(p, n0), s1 = pixel_normal(p + ivec2(1, 0), n1);
+    bool s2 = pixel_normal(p + ivec2(0, 1), n2), s3 = pixel_normal(p + ivec2(1, 1), n3);
+    // An `if`, not an early return: a vector of blocks off the mesh then skips the body on
+    // llvmpipe (pass.glsl's note on loops; a return only masks the lanes).
+    if (s0 || s1 || s2 || s3) filter_block(b, p, blocks, n0, n1, n2, n3, s0, s1, s2, s3);
+}
