@@ -20,17 +20,23 @@ layout(std430, set = 0, binding = 2) buffer Pixels { uint count; uint groups[3];
 // (in the order (0, 0), (1, 0), (0, 1), (1, 1)): the pixel whose samples a sparse filtered lobe
 // pass takes for the block (`denoise::sparse`).
 layout(std430, set = 0, binding = 3) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
+// Every pixel's shading normal, alpha 1 where listed (0 elsewhere): what the sparse filter reads.
+layout(set = 0, binding = 4, rgba32f) writeonly uniform image2D normals;
 
-bool listed_at(ivec2 p) {
+bool listed_at(ivec2 p, out vec3 n) {
     vec3 wo;
     Frame f;
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    return inside(p) && shaded(imageLoad(gpos, q), imageLoad(gnrm, q).xyz, f, wo);
+    bool listed = inside(p) && shaded(imageLoad(gpos, q), imageLoad(gnrm, q).xyz, f, wo);
+    n = f.n;
+    return listed;
 }
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    bool listed = listed_at(p);
+    vec3 normal;
+    bool listed = listed_at(p, normal);
+    if (inside(p)) imageStore(normals, p, vec4(normal, listed ? 1.0 : 0.0));
     // One atomic per subgroup: its listed lanes take consecutive places.
     uvec4 ballot = subgroupBallot(listed);
     uint n = subgroupBallotBitCount(ballot);
@@ -47,7 +53,8 @@ void main() {
     if ((p.x & 1) == 0 && (p.y & 1) == 0) {
         for (int k = 3; k >= 0; k--) {
             ivec2 r = p + ivec2(k & 1, k >> 1);
-            if (k == 0 ? listed : listed_at(r)) rep = r;
+            vec3 unused;
+            if (k == 0 ? listed : listed_at(r, unused)) rep = r;
         }
     }
     bool block = rep.x >= 0;

@@ -4,6 +4,7 @@
 // sample set per 2 × 2 block of pixels, at the block's first shaded pixel, and wrote its sum with
 // the lobe's light term into `cells` (one texel a block), marked with that pixel's normal.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "pass.glsl"
 #define R 3
 // Over the blocks (`denoise::sparse_groups`).
@@ -11,18 +12,20 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D cells;
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
-layout(set = 0, binding = 3, rgba32f) readonly uniform image2D gpos;
-layout(set = 0, binding = 4, rgba32f) readonly uniform image2D gnrm;
+// Every pixel's normal, alpha 1 where shaded (`compact.comp`).
+layout(set = 0, binding = 3, rgba32f) readonly uniform image2D pixel_normals;
 // fparams.x: log2(e) / σ².
 
 // The normal of a tag (`normal_tag` in lobe.comp: 1 + the octahedral code of the normal, 11 bits a
 // coordinate, an integer a float holds exactly).
 vec3 tag_normal(float tag) {
-    uint code = uint(tag - 1.0);
-    vec2 e = vec2(float(code >> 11), float(code & 2047u)) * (2.0 / 2047.0) - 1.0;
+    float code = tag - 1.0;
+    float hi = floor(code * (1.0 / 2048.0));
+    vec2 e = vec2(hi, code - 2048.0 * hi) * (2.0 / 2047.0) - 1.0;
     vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
-    return normalize(n);
+    vec2 folded = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    n.xy = n.z < 0.0 ? folded : n.xy;
+    return n * inversesqrt(dot(n, n));
 }
 
 // Each shaded pixel p gets the normal-weighted mean of the blocks
@@ -33,10 +36,9 @@ vec3 tag_normal(float tag) {
 // Pixel p's normal, and whether it is shaded (`shaded` in pass.glsl without the frame: the mesh,
 // facing the eye).
 bool pixel_normal(ivec2 p, out vec3 n) {
-    ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    vec4 P = imageLoad(gpos, q);
-    n = normalize(imageLoad(gnrm, q).xyz);
-    return inside(p) && P.w >= 0.5 && dot(n, pc.eye.xyz - P.xyz) > 0.0;
+    vec4 t = imageLoad(pixel_normals, min(p, ivec2(pc.size.xy) - 1));
+    n = t.xyz;
+    return inside(p) && t.w > 0.5;
 }
 
 // One block's part in a pixel's sums: its value t (rgb) at normal weight w in `sum` if the block is
@@ -65,8 +67,8 @@ void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec
     vec4 a0 = vec4(0.0), a1 = vec4(0.0), a2 = vec4(0.0), a3 = vec4(0.0);
     vec4 l0 = vec4(0.0), l1 = vec4(0.0), l2 = vec4(0.0), l3 = vec4(0.0);
     vec3 own = vec3(0.0), own_light = vec3(0.0);
-    for (int j = 0; j < 4; j++) {
-        for (int i = 0; i < 4; i++) {
+    [[unroll]] for (int j = 0; j < 4; j++) {
+        [[unroll]] for (int i = 0; i < 4; i++) {
             ivec2 q = b + ivec2(i - 1, j - 1);
             bool on = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, blocks));
             ivec2 qc = clamp(q, ivec2(0), blocks - 1);
@@ -79,10 +81,11 @@ void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec
                 own = t.rgb;
                 own_light = L;
             }
-            if (!on || t.a < 0.5) continue;
-            vec3 nq = tag_normal(t.a);
-            float w0 = exp2((dot(n0, nq) - 1.0) * k_p), w1 = exp2((dot(n1, nq) - 1.0) * k_p);
-            float w2 = exp2((dot(n2, nq) - 1.0) * k_p), w3 = exp2((dot(n3, nq) - 1.0) * k_p);
+            if (!on || t.a < 0.5) t.a = 0.0;
+            vec3 nq = tag_normal(max(t.a, 1.0));
+            float mark = t.a > 0.5 ? 1.0 : 0.0;
+            float w0 = mark * exp2((dot(n0, nq) - 1.0) * k_p), w1 = mark * exp2((dot(n1, nq) - 1.0) * k_p);
+            float w2 = mark * exp2((dot(n2, nq) - 1.0) * k_p), w3 = mark * exp2((dot(n3, nq) - 1.0) * k_p);
             float x_even = i == 1 ? 1.0 : 0.0, y_even = j == 1 ? 1.0 : 0.0;
             float x_odd = near ? 0.5 : 0.0, y_odd = near ? 0.5 : 0.0;
             // Along an even coordinate the fourth block is 4 pixels away: outside the window.

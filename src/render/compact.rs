@@ -10,11 +10,12 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 4] = [
+const BINDINGS: [vk::DescriptorType; 5] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_IMAGE,
 ];
 
 /// Invocations per group of the passes dispatched over the list (their `local_size_x`).
@@ -69,6 +70,7 @@ impl CompactPass {
                 Binding::StorageImage(t.normal.view),
                 Binding::Storage(&t.pixels),
                 Binding::Storage(&t.blocks),
+                Binding::StorageImage(t.pixel_normals.view),
             ],
         )?;
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
@@ -81,6 +83,7 @@ impl CompactPass {
             ctx.raw().cmd_update_buffer(cmd, t.blocks.raw, 0, bytemuck::cast_slice(&header));
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
+        t.pixel_normals.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         self.pipeline.bind(ctx, cmd, set, bytemuck::bytes_of(&rec.push));
         // SAFETY: `cmd` is recording with the compute pipeline bound.
         unsafe { ctx.raw().cmd_dispatch(cmd, t.width.div_ceil(8), t.height.div_ceil(8), 1) };

@@ -21,7 +21,7 @@ use crate::vk::{barrier, Context};
 use crate::Result;
 
 const BINDINGS: [vk::DescriptorType; 3] = [vk::DescriptorType::STORAGE_IMAGE; 3];
-const SPARSE_BINDINGS: [vk::DescriptorType; 5] = [vk::DescriptorType::STORAGE_IMAGE; 5];
+const SPARSE_BINDINGS: [vk::DescriptorType; 4] = [vk::DescriptorType::STORAGE_IMAGE; 4];
 
 /// The smallest `min(αx, αy)` of a filtered lobe.
 pub const MIN_ALPHA: f64 = 0.2;
@@ -119,8 +119,7 @@ impl DenoisePass {
                     Binding::StorageImage(t.cells.view),
                     Binding::StorageImage(t.accum.view),
                     Binding::StorageImage(t.cells_light.view),
-                    Binding::StorageImage(t.position.view),
-                    Binding::StorageImage(t.normal.view),
+                    Binding::StorageImage(t.pixel_normals.view),
                 ],
             )?;
             let groups = (t.width.div_ceil(2).div_ceil(8), t.height.div_ceil(2).div_ceil(8));

@@ -27,6 +27,10 @@ pub struct Targets {
     pub cells: Image,
     /// Their light terms (the lights' points), one texel a block, interpolated by the filter.
     pub cells_light: Image,
+    /// Every pixel's shading normal (xyz) and 1 in alpha where it is shaded, 0 elsewhere: written by
+    /// `compact` with the list, read by the sparse filter (a plain storage image, which llvmpipe
+    /// reads faster than the G-buffer's attachments).
+    pub pixel_normals: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
     /// run over it).
     pub pixels: Buffer,
@@ -85,6 +89,7 @@ impl Targets {
                 vk::ImageUsageFlags::STORAGE | dst,
                 "rough.cells_light",
             )?);
+            made.push(rgba(vk::ImageUsageFlags::empty(), "gbuffer.pixel_normals")?);
             let pixels = super::compact::list_buffer(ctx, u64::from(width) * u64::from(height), "pixels")?;
             match super::compact::list_buffer(ctx, u64::from(half.0) * u64::from(half.1), "blocks") {
                 Ok(blocks) => Ok((pixels, blocks)),
@@ -104,7 +109,7 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("nine images were made");
+        let mut next = || it.next().expect("ten images were made");
         Ok(Targets {
             width,
             height,
@@ -117,6 +122,7 @@ impl Targets {
             mid: next(),
             cells: next(),
             cells_light: next(),
+            pixel_normals: next(),
             pixels,
             blocks,
             gbuffer_of: None,
