@@ -1,12 +1,30 @@
 #version 460
 // The sparse form of the `key` estimator's filter of its rough lobes (issue 10; `render/denoise.rs`,
 // `denoise::sparse`; the dense form and the weights: denoise.comp). Their lobe passes took one
-// sample set per 2 × 2 block of pixels, at the block's first shaded pixel, and wrote its sum with
-// the lobe's light term into `cells` (one texel a block), marked with that pixel's normal.
+// sample set per 2 × 2 block of pixels, at the block's first shaded pixel, and wrote its sum into
+// `cells` (one texel a block, marked with that pixel's normal) and the lobe's light term into
+// `cells_light`.
+//
+// Each shaded pixel p gets the normal-weighted mean of the blocks within R pixels of it along each
+// axis (block c taken at pixel 2 c): along an even coordinate the blocks −1, 0, +1 of its own, along
+// an odd one −1 … +2. (So an odd coordinate's window holds one of the 3 strata of the lobe passes'
+// shifts twice, `lobe.comp` SPARSE; the outer two at half weight, which balances them, measured
+// slightly worse on the sweep's rough scenes at 64²: 8 spp 0.019–0.047 → 0.019–0.048.) Its
+// light term is interpolated bilinearly from the 2 × 2 nearest blocks (an even coordinate sits on
+// its block, an odd one halfway to the next), normal-weighted too. An invocation takes one block's
+// four pixels, whose windows together span its 4 × 4 neighbours, read once. The loops are unrolled
+// and skip nothing (an unmarked block weighs 0): on llvmpipe the same loops with a `continue` cost
+// twice as much (README, session 20). The pixel's own block is always marked (its list holds every
+// block with a shaded pixel); where every weight underflows, the pixel takes that block's values.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "pass.glsl"
+// The window's radius in pixels (`denoise::RADIUS`): its blocks, 4 along an odd coordinate, are
+// written out below.
 #define R 3
+#if R != 3
+#error "the window's blocks below are those within 3 pixels"
+#endif
 // Over the blocks (`denoise::sparse_groups`).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D cells;
@@ -17,7 +35,7 @@ layout(set = 0, binding = 3, rgba32f) readonly uniform image2D pixel_normals;
 // fparams.x: log2(e) / σ².
 
 // The normal of a tag (`normal_tag` in lobe.comp: 1 + the octahedral code of the normal, 11 bits a
-// coordinate, an integer a float holds exactly).
+// coordinate, an integer a float holds exactly); float arithmetic only.
 vec3 tag_normal(float tag) {
     float code = tag - 1.0;
     float hi = floor(code * (1.0 / 2048.0));
@@ -28,23 +46,27 @@ vec3 tag_normal(float tag) {
     return n * inversesqrt(dot(n, n));
 }
 
-// Each shaded pixel p gets the normal-weighted mean of the blocks
-// within R pixels of it along each axis (a block at 2 c): 3 × 3 blocks for a pixel of even
-// coordinates, 4 along an odd one. An invocation takes one block's four pixels, whose windows
-// together span its 4 × 4 neighbours, read once. The pixel's own block is always marked (its list
-// holds every block with a shaded pixel); where every weight underflows, its value is the pixel's.
-// Pixel p's normal, and whether it is shaded (`shaded` in pass.glsl without the frame: the mesh,
-// facing the eye).
+// Pixel p's normal, and whether it is shaded (what `compact.comp` wrote: `shaded` in pass.glsl).
 bool pixel_normal(ivec2 p, out vec3 n) {
     vec4 t = imageLoad(pixel_normals, min(p, ivec2(pc.size.xy) - 1));
     n = t.xyz;
     return inside(p) && t.w > 0.5;
 }
 
-// One block's part in a pixel's sums: its value t (rgb) at normal weight w in `sum` if the block is
-// within the pixel's window; its light term L at w times the bilinear weight `lin` in `light`.
-void add(vec3 t, vec3 L, float w, bool within, float lin, inout vec4 sum, inout vec4 light) {
-    if (within) sum += w * vec4(t, 1.0);
+// Whether block i (0 … 3 for the blocks −1 … +2) is in the window along a coordinate of parity `odd`.
+float along(int i, bool odd) {
+    return odd || i < 3 ? 1.0 : 0.0;
+}
+
+// The bilinear weight of block i along a coordinate of parity `odd` (blocks 0 and +1 only).
+float linear(int i, bool odd) {
+    return odd ? (i == 1 || i == 2 ? 0.5 : 0.0) : (i == 1 ? 1.0 : 0.0);
+}
+
+// One block's part in a pixel's sums: its value t at normal weight w times the spatial weight
+// `window` in `sum`, its light term L at w times the bilinear weight `lin` in `light`.
+void add(vec3 t, vec3 L, float w, float window, float lin, inout vec4 sum, inout vec4 light) {
+    sum += (w * window) * vec4(t, 1.0);
     light += (w * lin) * vec4(L, 1.0);
 }
 
@@ -62,8 +84,8 @@ void finish(ivec2 p, bool shaded, vec4 sum, vec4 light, vec3 own, vec3 own_light
 void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec3 n3, bool s0, bool s1, bool s2,
                   bool s3) {
     float k_p = pc.fparams.x;
-    // Weighted sums (rgb) and weights (a) of the four pixels; the pixel (1, 0) has an odd x, so its
-    // window holds a fourth column of blocks, and so on.
+    // Weighted sums (rgb) and weights (a) of the four pixels: pixel 1 is (1, 0) (an odd x), pixel 2
+    // (0, 1), pixel 3 (1, 1).
     vec4 a0 = vec4(0.0), a1 = vec4(0.0), a2 = vec4(0.0), a3 = vec4(0.0);
     vec4 l0 = vec4(0.0), l1 = vec4(0.0), l2 = vec4(0.0), l3 = vec4(0.0);
     vec3 own = vec3(0.0), own_light = vec3(0.0);
@@ -73,26 +95,20 @@ void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec
             bool on = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, blocks));
             ivec2 qc = clamp(q, ivec2(0), blocks - 1);
             vec4 t = imageLoad(cells, qc);
-            // The light terms of the 2 × 2 blocks b … b + 1, interpolated bilinearly: a pixel of
-            // even coordinate sits on its block, an odd one halfway to the next.
             bool near = i >= 1 && i <= 2 && j >= 1 && j <= 2;
             vec3 L = near ? imageLoad(cells_light, qc).rgb : vec3(0.0);
             if (i == 1 && j == 1) {
                 own = t.rgb;
                 own_light = L;
             }
-            if (!on || t.a < 0.5) t.a = 0.0;
+            float mark = on && t.a > 0.5 ? 1.0 : 0.0;
             vec3 nq = tag_normal(max(t.a, 1.0));
-            float mark = t.a > 0.5 ? 1.0 : 0.0;
             float w0 = mark * exp2((dot(n0, nq) - 1.0) * k_p), w1 = mark * exp2((dot(n1, nq) - 1.0) * k_p);
             float w2 = mark * exp2((dot(n2, nq) - 1.0) * k_p), w3 = mark * exp2((dot(n3, nq) - 1.0) * k_p);
-            float x_even = i == 1 ? 1.0 : 0.0, y_even = j == 1 ? 1.0 : 0.0;
-            float x_odd = near ? 0.5 : 0.0, y_odd = near ? 0.5 : 0.0;
-            // Along an even coordinate the fourth block is 4 pixels away: outside the window.
-            add(t.rgb, L, w0, i < 3 && j < 3, x_even * y_even, a0, l0);
-            add(t.rgb, L, w1, j < 3, x_odd * y_even, a1, l1);
-            add(t.rgb, L, w2, i < 3, x_even * y_odd, a2, l2);
-            add(t.rgb, L, w3, true, x_odd * y_odd, a3, l3);
+            add(t.rgb, L, w0, along(i, false) * along(j, false), linear(i, false) * linear(j, false), a0, l0);
+            add(t.rgb, L, w1, along(i, true) * along(j, false), linear(i, true) * linear(j, false), a1, l1);
+            add(t.rgb, L, w2, along(i, false) * along(j, true), linear(i, false) * linear(j, true), a2, l2);
+            add(t.rgb, L, w3, along(i, true) * along(j, true), linear(i, true) * linear(j, true), a3, l3);
         }
     }
     finish(p, s0, a0, l0, own, own_light);

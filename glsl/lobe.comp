@@ -38,6 +38,11 @@
 // (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
 // over neighbours of like normal, and the light term (points: no noise to filter) into the
 // accumulation image (binding 10). fparams.x then holds denoise::LOD_BIAS.
+// SPARSE (fparams.y 3, `denoise::sparse`): dispatched over the list of 2 × 2 blocks (binding 9 is
+// then `compact.comp`'s block list, each block by its first shaded pixel), the set shifted per block,
+// stratified over the sparse filter's 3 × 3 blocks; the block's sample sum goes into `cells`
+// (binding 2, at the block, marked with the pixel's normal) and its light term into `cells_light`
+// (binding 10), for denoise_sparse.comp to average and to interpolate.
 #extension GL_GOOGLE_include_directive : require
 // The filter's window along each axis, 2R + 1 in denoise.comp (`denoise::RADIUS`); the strata
 // below are mod 7.
@@ -47,7 +52,7 @@
 #endif
 // The most samples whose per-pixel shifts are stratified over that window (below).
 #define FEW_SAMPLES 4u
-// The sparse filter's window in blocks (denoise.comp's sparse pass): the strata below are mod 3.
+// The sparse filter's window in blocks (denoise_sparse.comp): the strata below are mod 3.
 #define SPARSE_WINDOW 3
 #define PIXELS_BINDING 9
 #include "pass.glsl"
@@ -86,7 +91,8 @@ layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 
 // same sample at once, which llvmpipe loads once for all lanes; a storage buffer read inside the
 // sample loop goes lane by lane there.
 layout(std140, set = 0, binding = 8) uniform LightSamples { vec4 v[2048]; } light_set;
-// The accumulation image, where a filtered pass (binding 2: `rough`) adds its light term.
+// The accumulation image, where a filtered pass (binding 2: `rough`) adds its light term; a sparse
+// pass's `cells_light`.
 layout(set = 0, binding = 10, rgba32f) uniform image2D direct;
 
 // The mark of a pixel a filtered lobe pass shades (denoise.comp): 1 + the octahedral code of its
@@ -533,8 +539,8 @@ void main() {
     if (!shaded(imageLoad(gpos, p), imageLoad(gnrm, p).xyz, f, wo)) return;
     // Frame 0 takes the set as it is; frame `seed` > 0 shifts it by a hash of the seed (the
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
-    // A lobe pass into the filter (fparams.y 1) shifts the set per pixel instead, so
-    // that each pixel's quadrature error is its own (render/denoise.rs).
+    // A lobe pass into the filter (fparams.y 1, 2; 3 sparse: per block) shifts the set per pixel
+    // instead, so that each pixel's quadrature error is its own (render/denoise.rs).
     bool filtered = pc.fparams.y > 0.5;
     uint seed = hash_u32(pc.params.z);
     // fparams.y 2: filtered with a hash per pixel at every count (`Renderer::stratified_shifts` off).
@@ -574,7 +580,10 @@ void main() {
         uvec2 u = uvec2(p) % uint(FILTER_WINDOW);
         rot = (vec2(float((5u * u.x + u.y) % 7u), float((u.x + 2u * u.y) % 7u)) + rot) / float(FILTER_WINDOW);
     }
-    float window = sparse ? float(SPARSE_WINDOW) : strata ? float(FILTER_WINDOW) : 1.0;
+    // The window's sets fill the W N strata of ξ₁ only where N is prime to W (N a multiple of 3
+    // would repeat them): otherwise a block keeps its own last stratum's cap.
+    float window = sparse ? (pc.params.y % uint(SPARSE_WINDOW) == 0u ? 1.0 : float(SPARSE_WINDOW))
+                 : strata ? float(FILTER_WINDOW) : 1.0;
     if (filtered) g_x1_max = 1.0 - 0.5 / (window * float(pc.params.y));
     float n = float(pc.params.y);
     float omega_texel = (2.0 * PI / float(pc.size.z)) * (PI / float(pc.size.w));

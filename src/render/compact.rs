@@ -76,7 +76,7 @@ impl CompactPass {
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
         barrier::memory(ctx, cmd, (LIST_READ.0, vk::AccessFlags2::NONE), barrier::TRANSFER_WRITE);
         let header: [u32; 4] = [0, 0, 1, 1];
-        // SAFETY: `cmd` is recording; the buffer is live and has TRANSFER_DST usage; 16 bytes, a
+        // SAFETY: `cmd` is recording; the buffers are live and have TRANSFER_DST usage; 16 bytes, a
         // multiple of 4 at offset 0.
         unsafe {
             ctx.raw().cmd_update_buffer(cmd, t.pixels.raw, 0, bytemuck::cast_slice(&header));

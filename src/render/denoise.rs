@@ -77,6 +77,12 @@ pub const SPARSE_MIN_SAMPLES: u32 = 4;
 /// 1 spp 0.049 dense, 0.081 sparse (at 64²: 0.047–0.069 on the six scenes above).
 pub const SPARSE_MIN_SIDE: u32 = 64;
 
+/// The workgroups (8 × 8 invocations, a 2 × 2 block of pixels each) of the sparse pass over a
+/// `w` × `h` image.
+pub fn sparse_groups(w: u32, h: u32) -> (u32, u32) {
+    (w.div_ceil(2).div_ceil(8), h.div_ceil(2).div_ceil(8))
+}
+
 /// Whether a `w` × `h` view holding `spp` samples a pixel filters sparsely.
 pub fn sparse(spp: u32, w: u32, h: u32) -> bool {
     spp <= SPARSE_MAX_SPP && w.min(h) >= SPARSE_MIN_SIDE
@@ -115,7 +121,8 @@ impl DenoisePass {
     }
 
     /// Adds the filtered `rough` image into the accumulation image (two passes, through `mid`, which
-    /// the first writes whole); `min_alpha`: the smallest `min(αx, αy)` of the lobes in it.
+    /// the first writes whole), or, `sparse`, the blocks' `cells` and `cells_light` (one pass over the
+    /// blocks); `min_alpha`: the smallest `min(αx, αy)` of the lobes in them.
     pub fn record(&self, rec: &Recording<'_>, min_alpha: f64, spp: u32, sparse: bool) -> Result<()> {
         let t = rec.targets;
         let sigma = sigma(min_alpha, spp);
@@ -132,8 +139,7 @@ impl DenoisePass {
                     Binding::StorageImage(t.pixel_normals.view),
                 ],
             )?;
-            let groups = (t.width.div_ceil(2).div_ceil(8), t.height.div_ceil(2).div_ceil(8));
-            rec.dispatch_groups(&self.sparse, set, &push, groups);
+            rec.dispatch_groups(&self.sparse, set, &push, sparse_groups(t.width, t.height));
             return Ok(());
         }
         // Its old contents are dropped: the first pass writes every pixel.

@@ -407,7 +407,7 @@ impl LobePass {
                 Binding::Storage(cones),
                 Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
                 Binding::Storage(if into == Into::Cells { &t.blocks } else { &t.pixels }),
-                // A filtered pass's light term (read only by those).
+                // A filtered pass's light term (read only by those; a sparse one's into `cells_light`).
                 Binding::StorageImage(if into == Into::Cells { t.cells_light.view } else { t.accum.view }),
             ],
         )?;
@@ -416,7 +416,8 @@ impl LobePass {
         // a block of 4 pixels, so 1 sample a pixel on average.
         let samples = if into == Into::Cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
         push.params = [index, samples, seed, m];
-        // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always.
+        // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
+        // 3 sparse (over the blocks).
         let mode = match into {
             Into::Accum => 0.0,
             Into::Rough { strata: true } => 1.0,

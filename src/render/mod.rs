@@ -124,6 +124,7 @@ pub struct Renderer {
     pub denoise: bool,
     /// Stratify the per-pixel shifts of a filtered lobe pass of up to 4 samples over the filter's
     /// window (`glsl/lobe.comp`); false takes a hash per pixel at every count (a test compares).
+    /// Dense frames only: a sparse frame's blocks are always stratified over its window.
     pub stratified_shifts: bool,
     /// Let frames of up to [`denoise::SPARSE_MAX_SPP`] samples sample the filtered lobes once per
     /// 2 × 2 block of pixels (`denoise::sparse`); false samples every pixel (a test compares).

@@ -377,9 +377,8 @@ impl Renderer {
                         l.alpha_x.min(l.alpha_y)
                     })
                     .fold(f64::INFINITY, f64::min);
-                // Sparse while the view holds at most `SPARSE_MAX_SPP` samples: past that a progressive
-                // refinement's frames sample every pixel, whose floor is lower.
-                let sparse = self.sparse_filter && denoise::sparse(offset + settings.spp, w, h);
+                // (Refinement frames are `mis` frames: a `key` frame is whole.)
+                let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
                 if min_alpha.is_finite() {
                     // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.
                     if sparse {

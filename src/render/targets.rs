@@ -73,22 +73,13 @@ impl Targets {
             made.push(rgba(dst, "rough")?);
             made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
             let half = (width.div_ceil(2), height.div_ceil(2));
-            made.push(Image::new(
-                ctx,
-                half,
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | dst,
-                "rough.cells",
-            )?);
-            made.push(Image::new(
-                ctx,
-                half,
-                vk::Format::R32G32B32A32_SFLOAT,
-                1,
-                vk::ImageUsageFlags::STORAGE | dst,
-                "rough.cells_light",
-            )?);
+            // A sparse frame's images: one texel a 2 × 2 block, cleared each frame.
+            let cells = |name: &str| {
+                let usage = vk::ImageUsageFlags::STORAGE | dst;
+                Image::new(ctx, half, vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
+            };
+            made.push(cells("rough.cells")?);
+            made.push(cells("rough.cells_light")?);
             made.push(rgba(vk::ImageUsageFlags::empty(), "gbuffer.pixel_normals")?);
             let pixels = super::compact::list_buffer(ctx, u64::from(width) * u64::from(height), "pixels")?;
             match super::compact::list_buffer(ctx, u64::from(half.0) * u64::from(half.1), "blocks") {
@@ -147,6 +138,7 @@ impl Targets {
             self.mid,
             self.cells,
             self.cells_light,
+            self.pixel_normals,
         ] {
             i.destroy(ctx);
         }
