@@ -127,9 +127,10 @@ impl DenoisePass {
         let t = rec.targets;
         let sigma = sigma(min_alpha, spp);
         let mut push = rec.push;
-        push.fparams = [(1.0 / (sigma * sigma)) as f32, 0.0, 0.0, 0.0];
+        // 1 / σ², or log2(e) / σ² for the sparse pass's `exp2`.
+        let scale = if sparse { std::f64::consts::LOG2_E } else { 1.0 };
+        push.fparams = [(scale / (sigma * sigma)) as f32, 0.0, 0.0, 0.0];
         if sparse {
-            push.fparams[0] = (std::f64::consts::LOG2_E / (sigma * sigma)) as f32;
             let set = rec.set(
                 &self.sparse,
                 &[

@@ -389,6 +389,8 @@ impl LobePass {
             (true, None) => env.residual().0,
             (false, _) => &env.texture,
         };
+        // A sparse pass runs over the blocks' list, the others over the pixels'.
+        let list = if into == Into::Cells { &t.blocks } else { &t.pixels };
         let set = rec.set(
             pipeline,
             &[
@@ -406,7 +408,7 @@ impl LobePass {
                 Binding::Sampled(texels.view, env.sampler),
                 Binding::Storage(cones),
                 Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
-                Binding::Storage(if into == Into::Cells { &t.blocks } else { &t.pixels }),
+                Binding::Storage(list),
                 // A filtered pass's light term (read only by those; a sparse one's into `cells_light`).
                 Binding::StorageImage(if into == Into::Cells { t.cells_light.view } else { t.accum.view }),
             ],
@@ -426,7 +428,7 @@ impl LobePass {
         };
         let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
         push.fparams = [bias, mode, counts[0], counts[1]];
-        rec.dispatch_over(if into == Into::Cells { &t.blocks } else { &t.pixels }, pipeline, set, &push);
+        rec.dispatch_over(list, pipeline, set, &push);
         Ok(())
     }
 

@@ -28,8 +28,8 @@ pub struct Targets {
     /// Their light terms (the lights' points), one texel a block, interpolated by the filter.
     pub cells_light: Image,
     /// Every pixel's shading normal (xyz) and 1 in alpha where it is shaded, 0 elsewhere: written by
-    /// `compact` with the list, read by the sparse filter (a plain storage image, which llvmpipe
-    /// reads faster than the G-buffer's attachments).
+    /// `compact` with the list, read by the sparse filter (one image load a pixel in place of the
+    /// G-buffer's two and its test).
     pub pixel_normals: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
     /// run over it).
