@@ -42,8 +42,10 @@
 // then `compact.comp`'s block list, each block by its first shaded pixel), the set shifted per block,
 // stratified over the sparse filter's 3 × 3 blocks; the block's sample sum goes into `cells`
 // (binding 2, at the block, marked with the pixel's normal) and its light term into `cells_light`
-// (binding 10), for denoise_sparse.comp to average and to interpolate.
+// (binding 10), for denoise_sparse.comp to average and to interpolate; fparams.y 4 the same, but the
+// light term taken at each of the block's pixels, into the accumulation image (binding 10).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // The filter's window along each axis, 2R + 1 in denoise.comp (`denoise::RADIUS`); the strata
 // below are mod 7.
 #define FILTER_WINDOW 7
@@ -593,18 +595,38 @@ void main() {
     // The split flag as the constant SPLIT: a split lobe without rotation has two equal views, so
     // F and Σ p_c (halved) are the same as one view's, and the flag's branches fold away.
     g_lobe = l; g_lobe.flags.x = SPLIT ? 1u : 0u; g_wo = wo; g_n = n; g_light_sum = vec3(0.0);
-    bool lit = LIGHTS && (!REACH_TEST || sees_lights(f, l.shape, b));
+    // fparams.y 4: sparse, the light term at each pixel of the block (below) instead.
+    bool pixel_lights = pc.fparams.y > 3.5;
+    bool lit = LIGHTS && !pixel_lights && (!REACH_TEST || sees_lights(f, l.shape, b));
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);
     if (sparse) {
         // The block's samples into `cells` (binding 2), its light term into `cells_light` (binding
-        // 10): the filter averages the first and interpolates the second.
+        // 10): the filter averages the first and interpolates the second. With pixel_lights, each
+        // of the block's shaded pixels adds its own light term into the accumulation image (binding
+        // 10 then): a lobe narrower than denoise::MIN_ALPHA resolves the lights' shape, which the
+        // interpolation over blocks would blur.
         ivec2 c = p / 2;
         vec4 acc = imageLoad(accum, c);
         acc.rgb += l.albedo.rgb * (half_sym * sum / n);
         acc.a = normal_tag(f.n);
         imageStore(accum, c, acc);
-        if (LIGHTS) {
+        // The reach test once for the block, at its first pixel.
+        if (LIGHTS && pixel_lights && (!REACH_TEST || sees_lights(f, l.shape, b))) {
+            [[unroll]] for (int k = 0; k < 4; k++) {
+                ivec2 px = 2 * c + ivec2(k & 1, k >> 1);
+                Frame fk;
+                vec3 wk;
+                if (inside(px) && shaded(imageLoad(gpos, px), imageLoad(gnrm, px).xyz, fk, wk)) {
+                    g_wo = wk;
+                    g_light_sum = vec3(0.0);
+                    light_samples(fk, ROTATED ? quat_rotate(q, wk) : wk);
+                    vec4 a = imageLoad(direct, px);
+                    a.rgb += l.albedo.rgb * g_light_sum;
+                    imageStore(direct, px, a);
+                }
+            }
+        } else if (LIGHTS && !pixel_lights) {
             vec4 a = imageLoad(direct, c);
             a.rgb += l.albedo.rgb * g_light_sum;
             imageStore(direct, c, a);

@@ -231,8 +231,10 @@ pub enum Into {
     Rough { strata: bool },
     /// `Targets::cells`, one sample set per 2 × 2 block, its light term with it (`denoise::sparse`):
     /// the pass runs over the blocks' list, at their first shaded pixel, the shifts stratified over
-    /// the sparse filter's window of 3 × 3 blocks.
-    Cells,
+    /// the sparse filter's window of 3 × 3 blocks. `pixel_lights`: the light term is taken at each
+    /// of the block's pixels, into the accumulation image, instead of once a block into
+    /// `Targets::cells_light` ([`super::denoise::pixel_lights`]).
+    Cells { pixel_lights: bool },
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -390,7 +392,8 @@ impl LobePass {
             (false, _) => &env.texture,
         };
         // A sparse pass runs over the blocks' list, the others over the pixels'.
-        let list = if into == Into::Cells { &t.blocks } else { &t.pixels };
+        let cells = matches!(into, Into::Cells { .. });
+        let list = if cells { &t.blocks } else { &t.pixels };
         let set = rec.set(
             pipeline,
             &[
@@ -399,7 +402,7 @@ impl LobePass {
                 Binding::StorageImage(match into {
                     Into::Accum => t.accum.view,
                     Into::Rough { .. } => t.rough.view,
-                    Into::Cells => t.cells.view,
+                    Into::Cells { .. } => t.cells.view,
                 }),
                 // `key` reads its residual within the nearest mip level (`environment::KEY_MIPMAP`).
                 Binding::Sampled(residual.view, if variant.key { env.key_sampler } else { env.sampler }),
@@ -409,22 +412,27 @@ impl LobePass {
                 Binding::Storage(cones),
                 Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
                 Binding::Storage(list),
-                // A filtered pass's light term (read only by those; a sparse one's into `cells_light`).
-                Binding::StorageImage(if into == Into::Cells { t.cells_light.view } else { t.accum.view }),
+                // A filtered pass's light term (read only by those; a sparse one's a block into
+                // `cells_light`).
+                Binding::StorageImage(match into {
+                    Into::Cells { pixel_lights: false } => t.cells_light.view,
+                    _ => t.accum.view,
+                }),
             ],
         )?;
         let mut push = rec.push;
         // A block's pixel takes at least one vector of 4 samples (fewer cost as much on llvmpipe):
         // a block of 4 pixels, so 1 sample a pixel on average.
-        let samples = if into == Into::Cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
+        let samples = if cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
         push.params = [index, samples, seed, m];
         // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
-        // 3 sparse (over the blocks).
+        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel.
         let mode = match into {
             Into::Accum => 0.0,
             Into::Rough { strata: true } => 1.0,
             Into::Rough { strata: false } => 2.0,
-            Into::Cells => 3.0,
+            Into::Cells { pixel_lights: false } => 3.0,
+            Into::Cells { pixel_lights: true } => 4.0,
         };
         let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
         push.fparams = [bias, mode, counts[0], counts[1]];

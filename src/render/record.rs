@@ -361,11 +361,16 @@ impl Renderer {
                     ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
                 }
                 let halton = &self.halton.as_ref().expect("made above").1;
+                // (Refinement frames are `mis` frames: a `key` frame is whole.)
+                let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
+                let floor = denoise::min_alpha(sparse, w, h);
                 // The rough lobes the filter takes (`denoise::fits`), and the smallest α among them.
                 let filtered: Vec<bool> = lobes
                     .iter()
                     .map(|(i, v)| {
-                        self.denoise && v.key && denoise::fits(&material.lobes[*i as usize], v.lights && !v.points)
+                        self.denoise
+                            && v.key
+                            && denoise::fits(&material.lobes[*i as usize], v.lights && !v.points, floor)
                     })
                     .collect();
                 let min_alpha = lobes
@@ -377,8 +382,6 @@ impl Renderer {
                         l.alpha_x.min(l.alpha_y)
                     })
                     .fold(f64::INFINITY, f64::min);
-                // (Refinement frames are `mis` frames: a `key` frame is whole.)
-                let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
                 if min_alpha.is_finite() {
                     // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.
                     if sparse {
@@ -391,7 +394,10 @@ impl Renderer {
                 for (&(i, v), &f) in lobes.iter().zip(&filtered) {
                     let into = match (f, sparse) {
                         (false, _) => lobe::Into::Accum,
-                        (true, true) => lobe::Into::Cells,
+                        (true, true) => {
+                            let l = &material.lobes[i as usize];
+                            lobe::Into::Cells { pixel_lights: denoise::pixel_lights(l, w, h) }
+                        }
                         (true, false) => lobe::Into::Rough { strata: self.stratified_shifts },
                     };
                     let name = match tiles.iter().find(|t| t.0 == i) {
