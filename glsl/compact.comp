@@ -1,6 +1,7 @@
 #version 460
 // The mesh view's shaded pixels as a list: every pixel where the G-buffer holds the mesh and the
-// surface faces the eye (`shaded` in pass.glsl, the test the lobe and mis passes make),
+// surface faces the eye (`shaded_ray` in pass.glsl, the test the lobe passes make; the mis
+// pass's `shaded` makes it from the position),
 // appended in no particular order, and the dispatch that covers the list in groups of 64
 // (`pixels.groups`, read by vkCmdDispatchIndirect). Built once per G-buffer.
 //
@@ -30,7 +31,7 @@ bool listed_at(ivec2 p, out vec3 n) {
     vec3 wo;
     Frame f;
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    bool listed = inside(p) && shaded(imageLoad(gpos, q), imageLoad(gnrm, q).xyz, f, wo);
+    bool listed = inside(p) && shaded_ray(q, imageLoad(gnrm, q), f, wo);
     n = f.n;
     return listed;
 }

@@ -36,10 +36,12 @@ void main() {
     }
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (!inside(p)) return;
-    vec4 P = imageLoad(gpos, p);
-    if (P.w < 0.5) return;
-    vec3 nrm = normalize(imageLoad(gnrm, p).xyz);
-    if (dot(nrm, pc.eye.xyz - P.xyz) <= 0.0) return;
+    // The normal texel alone (its alpha marks the object; the eye lies back along the camera ray:
+    // `shaded_ray` in pass.glsl).
+    vec4 N = imageLoad(gnrm, p);
+    if (N.w < 0.5) return;
+    vec3 nrm = normalize(N.xyz);
+    if (dot(nrm, -camera_ray(p)) <= 0.0) return;
     vec4 acc = imageLoad(accum, p);
     vec3 e = irradiance(c, nrm);
     for (uint k = 0u; k < 4u; k++) e += power[k].rgb * max(dot(nrm, dir[k].xyz), 0.0);

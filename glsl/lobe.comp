@@ -538,7 +538,7 @@ void main() {
     if (!listed_pixel(p)) return;
     Frame f;
     vec3 wo;
-    if (!shaded(imageLoad(gpos, p), imageLoad(gnrm, p).xyz, f, wo)) return;
+    if (!shaded_ray(p, imageLoad(gnrm, p), f, wo)) return;
     // Frame 0 takes the set as it is; frame `seed` > 0 shifts it by a hash of the seed (the
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
     // A lobe pass into the filter (fparams.y 1, 2; 3 sparse: per block) shifts the set per pixel
@@ -617,7 +617,7 @@ void main() {
                 ivec2 px = 2 * c + ivec2(k & 1, k >> 1);
                 Frame fk;
                 vec3 wk;
-                if (inside(px) && shaded(imageLoad(gpos, px), imageLoad(gnrm, px).xyz, fk, wk)) {
+                if (inside(px) && shaded_ray(px, imageLoad(gnrm, px), fk, wk)) {
                     g_wo = wk;
                     g_light_sum = vec3(0.0);
                     light_samples(fk, ROTATED ? quat_rotate(q, wk) : wk);
