@@ -830,29 +830,51 @@ fn the_in_cone_light_terms_after_the_sample_loop_equal_those_taken_in_it() {
 /// The editor's frames keep the G-buffer while mesh, camera and size are unchanged (a stroke or a
 /// refinement frame does not rasterise again), and rasterise when the camera moves; the kept
 /// G-buffer gives the same image as a fresh one (bit for bit: the same shading passes read it).
+/// Session 21: the second frame on a kept G-buffer saves what the background and diffuse passes
+/// drew (`base.save`), and the next ones start from it instead (`base`, neither pass), again bit
+/// for bit; a new diffuse albedo draws them again, and its image is a fresh frame's.
 #[test]
 fn frames_reuse_the_gbuffer_until_the_camera_moves() {
     let mut r = renderer();
     r.set_environment(&env("venice.exr")).unwrap();
     r.set_mesh(&Mesh::torus()).unwrap();
-    let m = &common::feature_materials()[1].1;
-    let s = settings(32, 4, Estimator::Fis);
-    let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
-    let mut frame = |s: &Settings| -> (Vec<String>, Image) {
-        r.begin_frame(m).unwrap();
-        assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
-        r.submit_frame(None, None).unwrap();
-        let image = r.read_mesh_view().unwrap();
-        let names = r.take_finished().into_iter().rev().find(|f| f.timings.iter().any(|t| t.name == "background"));
-        (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
-    };
-    let (first, a) = frame(&s);
-    let (second, b) = frame(&s);
-    let (third, _) = frame(&moved);
-    assert!(first.contains(&"gbuffer".to_string()), "{first:?}");
-    assert!(!second.contains(&"gbuffer".to_string()), "{second:?}");
-    assert!(third.contains(&"gbuffer".to_string()), "{third:?}");
-    assert_eq!(a.pixels, b.pixels);
+    let m = common::feature_materials()[1].1.clone();
+    let other = Material { diffuse: [0.1, 0.2, 0.3], ..m.clone() };
+    for estimator in [Estimator::Fis, Estimator::Key] {
+        let s = settings(32, 4, estimator);
+        let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
+        let mut frame = |m: &Material, s: &Settings| -> (Vec<String>, Image) {
+            r.begin_frame(m).unwrap();
+            assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
+            r.submit_frame(None, None).unwrap();
+            let image = r.read_mesh_view().unwrap();
+            let starts = |f: &brdf_shop::vk::frame::Finished| {
+                f.timings.iter().any(|t| t.name == "background" || t.name == "base")
+            };
+            let names = r.take_finished().into_iter().rev().find(starts);
+            (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
+        };
+        let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
+        // Another camera first, so that the first frame rasterises (the loop's last render kept
+        // its G-buffer).
+        frame(&m, &moved);
+        let (first, a) = frame(&m, &s);
+        let (second, b) = frame(&m, &s);
+        let (kept, c) = frame(&m, &s);
+        let (recoloured, d) = frame(&other, &s);
+        let (third, _) = frame(&m, &moved);
+        assert!(has(&first, "gbuffer") && !has(&first, "base.save"), "{first:?}");
+        assert!(!has(&second, "gbuffer") && has(&second, "background") && has(&second, "base.save"), "{second:?}");
+        assert!(has(&kept, "base") && !has(&kept, "background") && !has(&kept, "diffuse"), "{kept:?}");
+        assert!(has(&recoloured, "diffuse") && has(&recoloured, "base.save"), "{recoloured:?}");
+        assert!(has(&third, "gbuffer"), "{third:?}");
+        assert_eq!(a.pixels, b.pixels, "{estimator:?}: a kept G-buffer");
+        assert_eq!(a.pixels, c.pixels, "{estimator:?}: a kept base");
+        let fresh = r.render(&other, &s).unwrap().image;
+        assert_eq!(d.pixels, fresh.pixels, "{estimator:?}: a new diffuse albedo on a kept G-buffer");
+        assert_ne!(c.pixels, d.pixels);
+    }
+    r.ctx.check_validation().unwrap();
 }
 
 /// The editor builds new lobe pipelines off its thread (`Renderer::build_in_background`): a mesh view

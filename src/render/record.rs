@@ -329,6 +329,8 @@ impl Renderer {
             // Set again once the whole view is recorded (an error leaves nothing to reuse).
             targets.gbuffer_of = None;
         }
+        // Set again at the end, the same way (a frame that saves it may stop half-recorded).
+        let base_of = targets.base_of.take();
         let targets = self.views[slot].as_ref().expect("made above");
         let mut push = Push::default();
         camera_push(&settings.camera, w, h, &mut push);
@@ -350,15 +352,35 @@ impl Renderer {
                 passes.compact.record(&rec)
             })?;
         }
-        ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
+        // A frame that keeps the G-buffer starts from the image the background and diffuse passes
+        // left the frame before (`Targets::base`): while painting only the lobes change.
+        let base_key = (settings.estimator != Estimator::Mis && !raster).then(|| {
+            let env = self.env.as_ref().map(|e| e.key.clone()).unwrap_or_default();
+            (env, key, material.diffuse.map(f64::to_bits))
+        });
+        let restored = base_key.is_some() && base_of == base_key;
+        if restored {
+            ts.time(ctx, cmd, "base", || {
+                targets.restore_base(ctx, cmd);
+                Ok(())
+            })?;
+        } else {
+            ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
+        }
         match settings.estimator {
             Estimator::Mis => {
                 let seq = &self.sequence.as_ref().expect("made above").1;
                 ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, offset, settings.spp, material_buf, seq))?;
             }
             Estimator::Fis | Estimator::Plain | Estimator::Key => {
-                if material.diffuse.iter().any(|&d| d != 0.0) {
+                if !restored && material.diffuse.iter().any(|&d| d != 0.0) {
                     ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
+                }
+                if !restored && base_key.is_some() {
+                    ts.time(ctx, cmd, "base.save", || {
+                        targets.save_base(ctx, cmd);
+                        Ok(())
+                    })?;
                 }
                 let halton = &self.halton.as_ref().expect("made above").1;
                 // (Refinement frames are `mis` frames: a `key` frame is whole.)
@@ -437,6 +459,8 @@ impl Renderer {
         }
         let targets = self.views[slot].as_mut().expect("made above");
         targets.gbuffer_of = gbuffer_key;
+        // A `mis` frame leaves `base` as it was.
+        targets.base_of = if raster { None } else { base_key.or(base_of) };
         targets.drawn = true;
         Ok(Recorded::Done)
     }

@@ -39,6 +39,10 @@ pub struct Targets {
     pub blocks: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
+    /// The accumulation image as the background and diffuse passes left it, kept for frames that
+    /// keep the G-buffer (painting: only the lobes change), and what it was made from.
+    pub base: Image,
+    pub base_of: Option<BaseKey>,
     /// `accum` holds an image (a view was recorded into it, or it was cleared for a view waiting
     /// for its pipelines); false for new targets, whose images are undefined.
     pub drawn: bool,
@@ -46,6 +50,10 @@ pub struct Targets {
 
 /// What a G-buffer was rasterised from.
 pub type GBufferKey = ((String, usize, usize), crate::scene::Camera, bool);
+
+/// What `Targets::base` was drawn from besides the G-buffer: the environment's key, whether the
+/// diffuse term is `key`'s (the residual's SH and the lights), and the diffuse albedo's bits.
+pub type BaseKey = ((String, usize, usize, u64), bool, [u64; 3]);
 
 impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
@@ -69,6 +77,7 @@ impl Targets {
             };
             let (src, dst) = (vk::ImageUsageFlags::TRANSFER_SRC, vk::ImageUsageFlags::TRANSFER_DST);
             made.push(rgba(src | dst, "accum")?);
+            made.push(rgba(src | dst, "accum.base")?);
             made.push(rgba(src, "refinement.sum")?);
             made.push(rgba(dst, "rough")?);
             made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
@@ -100,7 +109,7 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("ten images were made");
+        let mut next = || it.next().expect("eleven images were made");
         Ok(Targets {
             width,
             height,
@@ -108,6 +117,7 @@ impl Targets {
             normal: next(),
             depth: next(),
             accum: next(),
+            base: next(),
             sum: next(),
             rough: next(),
             mid: next(),
@@ -117,6 +127,7 @@ impl Targets {
             pixels,
             blocks,
             gbuffer_of: None,
+            base_of: None,
             drawn: false,
         })
     }
@@ -127,12 +138,32 @@ impl Targets {
         self.accum.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
     }
 
+    /// Copies the accumulation image, as the background and diffuse passes wrote it, into `base`.
+    pub fn save_base(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let general = vk::ImageLayout::GENERAL;
+        self.accum.barrier(ctx, cmd, general, general, barrier::COMPUTE_WRITE, barrier::TRANSFER_READ);
+        self.base.discard_to_general(ctx, cmd, barrier::TRANSFER_WRITE);
+        self.accum.record_copy_to(ctx, cmd, &self.base);
+        // The lobe passes write `accum` after the copy has read it.
+        self.accum.barrier(ctx, cmd, general, general, barrier::TRANSFER_READ, barrier::COMPUTE_READ_WRITE);
+    }
+
+    /// Starts the accumulation image from `base` instead of the background and diffuse passes.
+    pub fn restore_base(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let general = vk::ImageLayout::GENERAL;
+        self.base.barrier(ctx, cmd, general, general, barrier::TRANSFER_WRITE, barrier::TRANSFER_READ);
+        self.accum.discard_to_general(ctx, cmd, barrier::TRANSFER_WRITE);
+        self.base.record_copy_to(ctx, cmd, &self.accum);
+        self.accum.barrier(ctx, cmd, general, general, barrier::TRANSFER_WRITE, barrier::ANY);
+    }
+
     pub fn destroy(self, ctx: &Context) {
         for i in [
             self.position,
             self.normal,
             self.depth,
             self.accum,
+            self.base,
             self.sum,
             self.rough,
             self.mid,

@@ -31,6 +31,11 @@ pub const COMPUTE_READ_WRITE: Scope = (
     ),
 );
 
+/// Every later access (the accumulation image after a copy: compute passes, or a readback).
+pub const ANY: Scope = (
+    vk::PipelineStageFlags2::ALL_COMMANDS,
+    vk::AccessFlags2::from_raw(vk::AccessFlags2::MEMORY_READ.as_raw() | vk::AccessFlags2::MEMORY_WRITE.as_raw()),
+);
 pub const TRANSFER_READ: Scope = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_READ);
 pub const TRANSFER_WRITE: Scope = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
 

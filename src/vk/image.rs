@@ -136,6 +136,30 @@ impl Image {
         );
     }
 
+    /// Records a copy of level 0 into `dst` (the same size and format), both in `GENERAL` (this
+    /// image made with `TRANSFER_SRC`, `dst` with `TRANSFER_DST`: the caller's contract, with the
+    /// barriers around it).
+    pub fn record_copy_to(&self, ctx: &Context, cmd: vk::CommandBuffer, dst: &Image) {
+        let layers = vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).layer_count(1);
+        let region = [vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
+            width: self.width.min(dst.width),
+            height: self.height.min(dst.height),
+            depth: 1,
+        })];
+        // SAFETY: `cmd` is recording outside a render pass; both images are live, in GENERAL, with
+        // the usages above (the caller's contract), and the region lies within both.
+        unsafe {
+            ctx.raw().cmd_copy_image(
+                cmd,
+                self.raw,
+                vk::ImageLayout::GENERAL,
+                dst.raw,
+                vk::ImageLayout::GENERAL,
+                &region,
+            )
+        };
+    }
+
     /// Records copies of every level from `staging` (levels packed one after another, tightly) and
     /// leaves the image in `SHADER_READ_ONLY_OPTIMAL` for compute shaders.
     pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer, staging: &Buffer, level_offsets: &[u64]) {
