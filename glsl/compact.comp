@@ -1,6 +1,6 @@
 #version 460
 // The mesh view's shaded pixels as a list: every pixel where the G-buffer holds the mesh and the
-// surface faces the eye (`shaded_ray` in pass.glsl, the test the lobe passes make; the mis
+// surface faces the eye (`shaded` in pass.glsl, the test the lobe passes make; the mis
 // pass's `shaded` makes it from the position),
 // appended in no particular order, and the dispatch that covers the list in groups of 64
 // (`pixels.groups`, read by vkCmdDispatchIndirect). Built once per G-buffer.
@@ -13,16 +13,15 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 #include "pass.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
-layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
-layout(std430, set = 0, binding = 2) buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
+layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
 // The same for the 2 × 2 blocks of pixels with any pixel listed, each by its first listed pixel
 // (in the order (0, 0), (1, 0), (0, 1), (1, 1)): the pixel whose samples a sparse filtered lobe
 // pass takes for the block (`denoise::sparse`).
-layout(std430, set = 0, binding = 3) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
+layout(std430, set = 0, binding = 2) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
 // Every pixel's shading normal, alpha 1 where listed (0 elsewhere): what the sparse filter reads.
-layout(set = 0, binding = 4, rgba32f) writeonly uniform image2D normals;
+layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D normals;
 
 // Whether each pixel of the group is listed.
 shared bool g_listed[8][8];
@@ -31,7 +30,7 @@ bool listed_at(ivec2 p, out vec3 n) {
     vec3 wo;
     Frame f;
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    bool listed = inside(p) && shaded_ray(q, imageLoad(gnrm, q), f, wo);
+    bool listed = inside(p) && shaded(q, imageLoad(gnrm, q), f, wo);
     n = f.n;
     return listed;
 }

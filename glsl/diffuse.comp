@@ -4,12 +4,11 @@
 #extension GL_GOOGLE_include_directive : require
 #include "pass.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
-layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
-layout(set = 0, binding = 2, rgba32f) uniform image2D accum;
-layout(std430, set = 0, binding = 3) readonly buffer Sh { vec4 c[9]; } sh;
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
+layout(std430, set = 0, binding = 2) readonly buffer Sh { vec4 c[9]; } sh;
 // params.x = 1: the key estimator's lights, added as distant sources (`GpuKeyLights::cones`).
-layout(std430, set = 0, binding = 4) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
+layout(std430, set = 0, binding = 3) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 
 vec3 irradiance(vec3 c[9], vec3 n) {
     float x = n.x, y = n.y, z = n.z;
@@ -37,7 +36,7 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (!inside(p)) return;
     // The normal texel alone (its alpha marks the object; the eye lies back along the camera ray:
-    // `shaded_ray` in pass.glsl).
+    // `shaded` in pass.glsl).
     vec4 N = imageLoad(gnrm, p);
     if (N.w < 0.5) return;
     vec3 nrm = normalize(N.xyz);

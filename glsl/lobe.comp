@@ -35,15 +35,15 @@
 // FILTERED (fparams.y 1, or 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the
 // set is shifted per pixel instead (at a few samples stratified over the filter's window), so each pixel's quadrature
 // error is its own (and a window's pixels together sample the lobe evenly); the samples' sum goes into `rough`
-// (binding 2) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
+// (binding 1) with the pixel's normal as its alpha mark (`normal_tag`), for denoise.comp to average
 // over neighbours of like normal, and the light term (points: no noise to filter) into the
-// accumulation image (binding 10). fparams.x then holds denoise::LOD_BIAS.
-// SPARSE (fparams.y 3, `denoise::sparse`): dispatched over the list of 2 × 2 blocks (binding 9 is
+// accumulation image (binding 9). fparams.x then holds denoise::LOD_BIAS.
+// SPARSE (fparams.y 3, `denoise::sparse`): dispatched over the list of 2 × 2 blocks (binding 8 is
 // then `compact.comp`'s block list, each block by its first shaded pixel), the set shifted per block,
 // stratified over the sparse filter's 3 × 3 blocks; the block's sample sum goes into `cells`
-// (binding 2, at the block, marked with the pixel's normal) and its light term into `cells_light`
-// (binding 10), for denoise_sparse.comp to average and to interpolate; fparams.y 4 the same, but the
-// light term taken at each of the block's pixels, into the accumulation image (binding 10).
+// (binding 1, at the block, marked with the pixel's normal) and its light term into `cells_light`
+// (binding 9), for denoise_sparse.comp to average and to interpolate; fparams.y 4 the same, but the
+// light term taken at each of the block's pixels, into the accumulation image (binding 9).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 // The filter's window along each axis, 2R + 1 in denoise.comp (`denoise::RADIUS`); the strata
@@ -56,7 +56,7 @@
 #define FEW_SAMPLES 4u
 // The sparse filter's window in blocks (denoise_sparse.comp): the strata below are mod 3.
 #define SPARSE_WINDOW 3
-#define PIXELS_BINDING 9
+#define PIXELS_BINDING 8
 #include "pass.glsl"
 // Over the list of shaded pixels (compact.comp).
 layout(local_size_x = 64) in;
@@ -73,29 +73,28 @@ layout(constant_id = 9) const bool LIGHTS = false;   // KEY with key lights: the
 layout(constant_id = 10) const bool POINTS = false;  // LIGHTS as quadrature points (a lobe much wider than the lights)
 layout(constant_id = 11) const bool REACH_TEST = false;  // LIGHTS, one narrow component: skip the lights out of reach
 
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
-layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
-layout(set = 0, binding = 2, rgba32f) uniform image2D accum;
-layout(set = 0, binding = 3) uniform sampler2D env_tex;
-#define MATERIAL_BINDING 4
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
+layout(set = 0, binding = 2) uniform sampler2D env_tex;
+#define MATERIAL_BINDING 3
 #include "material.glsl"
 struct Group { vec4 neglog; vec4 cos_phi; vec4 sin_phi; vec4 valid; };
-layout(std430, set = 0, binding = 5) readonly buffer Halton { Group g[]; } halton;
+layout(std430, set = 0, binding = 4) readonly buffer Halton { Group g[]; } halton;
 // LIGHTS: the lights' texels, rgb L_key and alpha the pdf over (u, v) (`GpuKeyLights::texels`), and
 // their cones (a `wide` variant's REACH_TEST reads the key and wide lights', `GpuWideLights::cones`);
 // bound to stand-ins otherwise.
-layout(set = 0, binding = 6) uniform sampler2D light_tex;
+layout(set = 0, binding = 5) uniform sampler2D light_tex;
 // count: (lights, CDF entries, 0, 0); per light vec4(direction, cos extent), vec4(power rgb, extent).
-layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
+layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 // The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
 // vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
 // A uniform block (`gpu::LIGHT_SET_UNIFORM_BYTES`, at most 1024 samples or points): every invocation reads the
 // same sample at once, which llvmpipe loads once for all lanes; a storage buffer read inside the
 // sample loop goes lane by lane there.
-layout(std140, set = 0, binding = 8) uniform LightSamples { vec4 v[2048]; } light_set;
-// The accumulation image, where a filtered pass (binding 2: `rough`) adds its light term; a sparse
+layout(std140, set = 0, binding = 7) uniform LightSamples { vec4 v[2048]; } light_set;
+// The accumulation image, where a filtered pass (binding 1: `rough`) adds its light term; a sparse
 // pass's `cells_light`.
-layout(set = 0, binding = 10, rgba32f) uniform image2D direct;
+layout(set = 0, binding = 9, rgba32f) uniform image2D direct;
 
 // The mark of a pixel a filtered lobe pass shades (denoise.comp): 1 + the octahedral code of its
 // normal, 11 bits a coordinate (an integer below 2^22: exact in a float; 0 is the cleared image's).
@@ -538,7 +537,7 @@ void main() {
     if (!listed_pixel(p)) return;
     Frame f;
     vec3 wo;
-    if (!shaded_ray(p, imageLoad(gnrm, p), f, wo)) return;
+    if (!shaded(p, imageLoad(gnrm, p), f, wo)) return;
     // Frame 0 takes the set as it is; frame `seed` > 0 shifts it by a hash of the seed (the
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
     // A lobe pass into the filter (fparams.y 1, 2; 3 sparse: per block) shifts the set per pixel
@@ -601,10 +600,10 @@ void main() {
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);
     if (sparse) {
-        // The block's samples into `cells` (binding 2), its light term into `cells_light` (binding
-        // 10): the filter averages the first and interpolates the second. With pixel_lights, each
+        // The block's samples into `cells` (binding 1), its light term into `cells_light` (binding
+        // 9): the filter averages the first and interpolates the second. With pixel_lights, each
         // of the block's shaded pixels adds its own light term into the accumulation image (binding
-        // 10 then): a lobe narrower than denoise::MIN_ALPHA resolves the lights' shape, which the
+        // 9 then): a narrow lobe (denoise::pixel_lights) resolves the lights' shape, which the
         // interpolation over blocks would blur.
         ivec2 c = p / 2;
         vec4 acc = imageLoad(accum, c);
@@ -617,7 +616,7 @@ void main() {
                 ivec2 px = 2 * c + ivec2(k & 1, k >> 1);
                 Frame fk;
                 vec3 wk;
-                if (inside(px) && shaded_ray(px, imageLoad(gnrm, px), fk, wk)) {
+                if (inside(px) && shaded(px, imageLoad(gnrm, px), fk, wk)) {
                     g_wo = wk;
                     g_light_sum = vec3(0.0);
                     light_samples(fk, ROTATED ? quat_rotate(q, wk) : wk);

@@ -5,21 +5,20 @@
 // QMC sequence (Halton, bases 2, 3, 5, 7, 11 from index 1) is Cranley–Patterson rotated per pixel.
 // Dispatched in chunks of samples; each chunk adds its share of the mean.
 #extension GL_GOOGLE_include_directive : require
-#define PIXELS_BINDING 9
+#define PIXELS_BINDING 8
 #include "pass.glsl"
 // Over the list of shaded pixels (compact.comp).
 layout(local_size_x = 64) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gpos;
-layout(set = 0, binding = 1, rgba32f) readonly uniform image2D gnrm;
-layout(set = 0, binding = 2, rgba32f) uniform image2D accum;
-layout(set = 0, binding = 3) uniform sampler2D env_tex;
-#define MATERIAL_BINDING 4
+layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
+layout(set = 0, binding = 2) uniform sampler2D env_tex;
+#define MATERIAL_BINDING 3
 #define MATERIAL_UNIFORM
 #include "material.glsl"
-layout(std430, set = 0, binding = 5) readonly buffer Qmc { vec4 v[]; } qmc; // 2 per sample
-layout(std430, set = 0, binding = 6) readonly buffer Marginal { float v[]; } marginal;
-layout(std430, set = 0, binding = 7) readonly buffer Conditional { float v[]; } conditional;
-layout(std430, set = 0, binding = 8) readonly buffer EnvPdf { float v[]; } env_pdf_table;
+layout(std430, set = 0, binding = 4) readonly buffer Qmc { vec4 v[]; } qmc; // 2 per sample
+layout(std430, set = 0, binding = 5) readonly buffer Marginal { float v[]; } marginal;
+layout(std430, set = 0, binding = 6) readonly buffer Conditional { float v[]; } conditional;
+layout(std430, set = 0, binding = 7) readonly buffer EnvPdf { float v[]; } env_pdf_table;
 #define ENV_TEX env_tex
 #define ENV_MARGINAL marginal
 #define ENV_CONDITIONAL conditional
@@ -32,7 +31,7 @@ void main() {
     if (!listed_pixel(p)) return;
     Frame f;
     vec3 wo;
-    if (!shaded(imageLoad(gpos, p), imageLoad(gnrm, p).xyz, f, wo)) return;
+    if (!shaded(p, imageLoad(gnrm, p), f, wo)) return;
     uint pixel = uint(p.y) * pc.size.x + uint(p.x);
     vec4 rot0 = vec4(hash_unit(pixel * 5u), hash_unit(pixel * 5u + 1u), hash_unit(pixel * 5u + 2u), 0.0);
     vec2 rot1 = vec2(hash_unit(pixel * 5u + 3u), hash_unit(pixel * 5u + 4u));

@@ -35,20 +35,12 @@ vec3 camera_ray(ivec2 p) {
 
 bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
 
-// Whether a G-buffer texel (P, its position with the coverage flag; n, its normal) holds the mesh
-// facing the eye, with its shading frame and ω_o (local): the pixels the mis pass shades.
-bool shaded(vec4 P, vec3 n, out Frame f, out vec3 wo) {
-    f = frame_from_normal(normalize(n));
-    wo = to_local(f, normalize(pc.eye.xyz - P.xyz));
-    return P.w >= 0.5 && wo.z > 0.0;
-}
-
-// The same test from the G-buffer's normal texel alone (alpha 1 marks the object): ω_o is the
-// reverse of the pixel's camera ray, on which its G-buffer position lies (the same direction to
-// rounding). The pixels `compact.comp` lists and the lobe passes shade: one image load a pixel
-// instead of two (session 21: `key`'s 512² bench frame 37.5–39.8 → 36.9 ms, `fis`'s 81.6–82.8 →
-// 80.4–80.5, alternating binaries).
-bool shaded_ray(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
+// Whether a G-buffer texel N (the normal, alpha 1 marking the object) holds the mesh facing the
+// eye, with its shading frame and ω_o (local): the pixels `compact.comp` lists and the mesh passes
+// shade. ω_o is the reverse of the pixel's camera ray, on which the surface point lies (the
+// G-buffer keeps no position: session 21, one image load a pixel instead of two, and about 5 ms
+// less rasterising at 512² on llvmpipe).
+bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
     f = frame_from_normal(normalize(N.xyz));
     wo = to_local(f, -camera_ray(p));
     return N.w >= 0.5 && wo.z > 0.0;

@@ -29,7 +29,7 @@ impl BackgroundPass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.position.view),
+                Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
                 Binding::Sampled(env.texture.view, env.sampler),
             ],

@@ -10,8 +10,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 5] = [
-    vk::DescriptorType::STORAGE_IMAGE,
+const BINDINGS: [vk::DescriptorType; 4] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -66,7 +65,6 @@ impl CompactPass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::Storage(&t.pixels),
                 Binding::Storage(&t.blocks),

@@ -9,8 +9,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 5] = [
-    vk::DescriptorType::STORAGE_IMAGE,
+const BINDINGS: [vk::DescriptorType; 4] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -36,7 +35,6 @@ impl DiffusePass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
                 Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),

@@ -1,5 +1,6 @@
-//! Pass 0: rasterises the mesh into the G-buffer (world position with coverage, world normal), so
-//! that every shading pass costs the same whatever the triangle count.
+//! Pass 0: rasterises the mesh into the G-buffer (the world normal, its alpha marking the object;
+//! the passes take ω_o from the pixel's camera ray), so that every shading pass costs the same
+//! whatever the triangle count.
 
 use ash::vk;
 
@@ -24,13 +25,13 @@ impl GBufferPass {
             64,
             VERTEX_STRIDE,
             &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R32G32B32_SFLOAT, 12)],
-            &[GBUFFER_FORMAT, GBUFFER_FORMAT],
+            &[GBUFFER_FORMAT],
             DEPTH_FORMAT,
         )?;
         Ok(GBufferPass { pipeline })
     }
 
-    /// Records the pass; leaves position and normal in `GENERAL` for the compute passes. With `cull`,
+    /// Records the pass; leaves the normal in `GENERAL` for the compute passes. With `cull`,
     /// the faces the mesh hides from an eye outside it are skipped (the caller checks the eye).
     pub fn record(
         &self,
@@ -55,9 +56,8 @@ impl GBufferPass {
             vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
             vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
         );
-        for image in [&targets.position, &targets.normal] {
-            image.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, none, color);
-        }
+        let normal = &targets.normal;
+        normal.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, none, color);
         targets.depth.barrier(
             ctx,
             cmd,
@@ -67,14 +67,12 @@ impl GBufferPass {
             depth_access,
         );
         let clear = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
-        let colors = [&targets.position, &targets.normal].map(|i| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(i.view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(clear)
-        });
+        let colors = [vk::RenderingAttachmentInfo::default()
+            .image_view(normal.view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(clear)];
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(targets.depth.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -120,9 +118,7 @@ impl GBufferPass {
             raw.cmd_end_rendering(cmd);
         }
         let read = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
-        for image in [&targets.position, &targets.normal] {
-            image.barrier(ctx, cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::GENERAL, color, read);
-        }
+        normal.barrier(ctx, cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::GENERAL, color, read);
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -19,8 +19,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 11] = [
-    vk::DescriptorType::STORAGE_IMAGE,
+const BINDINGS: [vk::DescriptorType; 10] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -397,7 +396,6 @@ impl LobePass {
         let set = rec.set(
             pipeline,
             &[
-                Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(match into {
                     Into::Accum => t.accum.view,

@@ -13,8 +13,7 @@ use crate::Result;
 /// Samples per dispatch.
 pub const CHUNK: u32 = 32;
 
-const BINDINGS: [vk::DescriptorType; 10] = [
-    vk::DescriptorType::STORAGE_IMAGE,
+const BINDINGS: [vk::DescriptorType; 9] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -50,7 +49,6 @@ impl MisPass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.position.view),
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
                 Binding::Sampled(env.texture.view, env.sampler),

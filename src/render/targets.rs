@@ -1,5 +1,5 @@
-//! The images a frame renders into, per image size: the G-buffer (world position with a coverage
-//! flag, world normal, depth), the `RGBA32F` accumulation image the shading passes add into, and
+//! The images a frame renders into, per image size: the G-buffer (world normal with the object's
+//! mark in alpha, depth), the `RGBA32F` accumulation image the shading passes add into, and
 //! the running sum of progressive refinement. They persist from frame to frame (per view).
 
 use ash::vk;
@@ -13,7 +13,6 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub struct Targets {
     pub width: u32,
     pub height: u32,
-    pub position: Image,
     pub normal: Image,
     pub depth: Image,
     pub accum: Image,
@@ -29,7 +28,7 @@ pub struct Targets {
     pub cells_light: Image,
     /// Every pixel's shading normal (xyz) and 1 in alpha where it is shaded, 0 elsewhere: written by
     /// `compact` with the list, read by the sparse filter (one image load a pixel in place of the
-    /// G-buffer's two and its test).
+    /// G-buffer's and its test).
     pub pixel_normals: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
     /// run over it).
@@ -60,7 +59,6 @@ impl Targets {
         let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
         let mut made: Vec<Image> = Vec::new();
         let built = (|| -> Result<(Buffer, Buffer)> {
-            made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.position")?);
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
             made.push(Image::new(
                 ctx,
@@ -109,11 +107,10 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("eleven images were made");
+        let mut next = || it.next().expect("ten images were made");
         Ok(Targets {
             width,
             height,
-            position: next(),
             normal: next(),
             depth: next(),
             accum: next(),
@@ -159,7 +156,6 @@ impl Targets {
 
     pub fn destroy(self, ctx: &Context) {
         for i in [
-            self.position,
             self.normal,
             self.depth,
             self.accum,
