@@ -1,7 +1,6 @@
 #version 460
 // The mesh view's shaded pixels as a list: every pixel where the G-buffer holds the mesh and the
-// surface faces the eye (`shaded` in pass.glsl, the test the lobe passes make; the mis
-// pass's `shaded` makes it from the position),
+// surface faces the eye (`shaded` in pass.glsl, the test every mesh pass makes),
 // appended in no particular order, and the dispatch that covers the list in groups of 64
 // (`pixels.groups`, read by vkCmdDispatchIndirect). Built once per G-buffer.
 //
@@ -22,9 +21,6 @@ layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3];
 layout(std430, set = 0, binding = 2) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
 // Every pixel's shading normal, alpha 1 where listed (0 elsewhere): what the sparse filter reads.
 layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D normals;
-
-// Whether each pixel of the group is listed.
-shared bool g_listed[8][8];
 
 bool listed_at(ivec2 p, out vec3 n) {
     vec3 wo;
@@ -51,17 +47,13 @@ void main() {
     base = subgroupBroadcastFirst(base);
     if (listed) pixels.at[base + subgroupBallotExclusiveBitCount(ballot)] = uint(p.x) | (uint(p.y) << 16);
 
-    // The block of which p is the first pixel (p even): its representative, from the group's flags
-    // (the group is 8 × 8, so a block never straddles two groups; image loads cost far more than
-    // shared memory on llvmpipe).
-    uvec2 l = gl_LocalInvocationID.xy;
-    g_listed[l.y][l.x] = listed;
-    barrier();
+    // The block of which p is the first pixel (p even): its representative.
     ivec2 rep = ivec2(-1);
     if ((p.x & 1) == 0 && (p.y & 1) == 0) {
         for (int k = 3; k >= 0; k--) {
-            uvec2 r = l + uvec2(k & 1, k >> 1);
-            if (g_listed[r.y][r.x]) rep = p + ivec2(k & 1, k >> 1);
+            ivec2 r = p + ivec2(k & 1, k >> 1);
+            vec3 unused;
+            if (k == 0 ? listed : listed_at(r, unused)) rep = r;
         }
     }
     bool block = rep.x >= 0;

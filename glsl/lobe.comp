@@ -93,7 +93,7 @@ layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 
 // sample loop goes lane by lane there.
 layout(std140, set = 0, binding = 7) uniform LightSamples { vec4 v[2048]; } light_set;
 // The accumulation image, where a filtered pass (binding 1: `rough`) adds its light term; a sparse
-// pass's `cells_light`.
+// pass's `cells_light` (fparams.y 3) or the accumulation image again (4: the light term per pixel).
 layout(set = 0, binding = 9, rgba32f) uniform image2D direct;
 
 // The mark of a pixel a filtered lobe pass shades (denoise.comp): 1 + the octahedral code of its
@@ -610,16 +610,22 @@ void main() {
         acc.rgb += l.albedo.rgb * (half_sym * sum / n);
         acc.a = normal_tag(f.n);
         imageStore(accum, c, acc);
-        // The reach test once for the block, at its first pixel.
-        if (LIGHTS && pixel_lights && (!REACH_TEST || sees_lights(f, l.shape, b))) {
+        // Each pixel's own reach test: a block may straddle a crease or a silhouette.
+        if (LIGHTS && pixel_lights) {
             [[unroll]] for (int k = 0; k < 4; k++) {
                 ivec2 px = 2 * c + ivec2(k & 1, k >> 1);
                 Frame fk;
                 vec3 wk;
-                if (inside(px) && shaded(px, imageLoad(gnrm, px), fk, wk)) {
+                vec3 bk = vec3(0.0);
+                bool in_reach = inside(px) && shaded(px, imageLoad(gnrm, px), fk, wk);
+                if (in_reach) {
+                    bk = ROTATED ? quat_rotate(q, wk) : wk;
+                    in_reach = !REACH_TEST || sees_lights(fk, l.shape, bk);
+                }
+                if (in_reach) {
                     g_wo = wk;
                     g_light_sum = vec3(0.0);
-                    light_samples(fk, ROTATED ? quat_rotate(q, wk) : wk);
+                    light_samples(fk, bk);
                     vec4 a = imageLoad(direct, px);
                     a.rgb += l.albedo.rgb * g_light_sum;
                     imageStore(direct, px, a);

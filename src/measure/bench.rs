@@ -189,12 +189,14 @@ fn measure(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize) -> Resu
 
 /// The frames of `s` as the editor draws them while its camera stays: each keeps the G-buffer (and
 /// its list of shaded pixels) of the frame before (`Renderer::record`), so it is its shading passes
-/// alone. The first frame (it rasterises, and drivers compile on first use) is not counted;
-/// `pixel_samples` as [`measure`] counted them.
+/// alone, and from the second such frame on it starts from the image the background and diffuse
+/// passes drew (`Targets::base`). The first two frames (the first may rasterise, and drivers
+/// compile on first use; the second keeps that image) are not counted; `pixel_samples` as
+/// [`measure`] counted them.
 fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pixel_samples: u64) -> Result<Times> {
     r.finish_frames()?;
     r.take_finished();
-    for _ in 0..repeats.max(1) + 1 {
+    for _ in 0..repeats.max(1) + 2 {
         r.begin_frame(m)?;
         match r.record(m, s, crate::render::Progress::Fresh) {
             Ok(crate::render::Recorded::Done) => {}
@@ -211,7 +213,7 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
     }
     r.finish_frames()?;
     r.ctx.check_validation()?;
-    let frames: Vec<Vec<PassTime>> = r.take_finished().into_iter().skip(1).map(|f| f.timings).collect();
+    let frames: Vec<Vec<PassTime>> = r.take_finished().into_iter().skip(2).map(|f| f.timings).collect();
     if frames.iter().any(|timings| timings.iter().any(|t| t.name == "gbuffer")) {
         return Err(crate::Error::input("bench", "a frame with the camera unchanged rasterised its G-buffer again"));
     }

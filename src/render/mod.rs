@@ -401,14 +401,24 @@ impl Renderer {
         self.ring.as_mut().expect("ring lives until drop").submit(&self.ctx, wait, signal)
     }
 
-    /// Ends the frame begun by [`Renderer::begin_frame`] without running it.
+    /// Ends the frame begun by [`Renderer::begin_frame`] without running it. What its recording
+    /// marked as kept (the G-buffer, `Targets::base`) was never drawn, so nothing is kept.
     pub fn abandon_frame(&mut self) -> Result<()> {
+        self.forget_kept();
         self.ring.as_mut().expect("ring lives until drop").abandon(&self.ctx)
+    }
+
+    fn forget_kept(&mut self) {
+        for t in self.views.iter_mut().flatten() {
+            t.gbuffer_of = None;
+            t.base_of = None;
+        }
     }
 
     /// Ends the frame being recorded without running it after a swapchain acquire signalled
     /// `acquired` (see [`crate::vk::frame::FrameRing::abandon_acquired`]).
     pub fn abandon_acquired_frame(&mut self, acquired: vk::Semaphore) -> Result<()> {
+        self.forget_kept();
         self.ring.as_mut().expect("ring lives until drop").abandon_acquired(&self.ctx, acquired)
     }
 
