@@ -9,9 +9,10 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 4] = [
+const BINDINGS: [vk::DescriptorType; 5] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
@@ -40,12 +41,13 @@ impl DiffusePass {
                 Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
                 // The lights (a stand-in with none).
                 Binding::Storage(keys.map_or(&env.sh, |k| &k.cones)),
+                Binding::Storage(&t.pixels),
             ],
         )?;
         let mut push = rec.push;
         push.fparams = [diffuse[0] as f32, diffuse[1] as f32, diffuse[2] as f32, 0.0];
         push.params[0] = u32::from(keys.is_some());
-        rec.dispatch(&self.pipeline, set, &push);
+        rec.dispatch_over(&t.pixels, &self.pipeline, set, &push);
         Ok(())
     }
 

@@ -30,7 +30,7 @@ pub struct Targets {
     /// `compact` with the list, read by the sparse filter (one image load a pixel in place of the
     /// G-buffer's and its test).
     pub pixel_normals: Image,
-    /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's lobe and `mis` passes
+    /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's diffuse, lobe and `mis` passes
     /// run over it).
     pub pixels: Buffer,
     /// The 2 × 2 blocks with a shaded pixel, each by its first shaded pixel (`compact`): the sparse
