@@ -83,8 +83,9 @@ impl CompactPass {
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
         t.pixel_normals.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         self.pipeline.bind(ctx, cmd, set, bytemuck::bytes_of(&rec.push));
-        // SAFETY: `cmd` is recording with the compute pipeline bound.
-        unsafe { ctx.raw().cmd_dispatch(cmd, t.width.div_ceil(8), t.height.div_ceil(8), 1) };
+        // SAFETY: `cmd` is recording with the compute pipeline bound. One invocation a 2 × 2 block, 8 × 8
+        // invocations a group.
+        unsafe { ctx.raw().cmd_dispatch(cmd, t.width.div_ceil(16), t.height.div_ceil(16), 1) };
         barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);
         Ok(())
     }
