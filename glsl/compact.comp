@@ -12,6 +12,7 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_EXT_control_flow_attributes : require
 #include "pass.glsl"
+#include "diffuse.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
@@ -22,13 +23,23 @@ layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3];
 layout(std430, set = 0, binding = 2) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
 // Every pixel's shading normal, alpha 1 where listed (0 elsewhere): what the sparse filter reads.
 layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D normals;
+// The frame's image, started here in a frame that rasterises (background.comp and diffuse.comp
+// otherwise): the environment (level 0) behind the object with alpha 0, (0, 0, 0, 1) on it, plus the
+// diffuse term at the listed pixels where params.y = 1 (albedo fparams.rgb, params.x the key
+// estimator's lights, as diffuse.comp takes them).
+layout(set = 0, binding = 4, rgba32f) writeonly uniform image2D accum;
+layout(set = 0, binding = 5) uniform sampler2D env_tex;
+layout(std430, set = 0, binding = 6) readonly buffer Sh { vec4 c[9]; } sh;
+layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 
 // Whether pixel p (inside the image or not) is listed, and its unit normal: `shaded` in pass.glsl
-// without the tangent frame, whose ω_o.z is the same dot product.
-bool listed_at(ivec2 p, out vec3 n) {
+// without the tangent frame, whose ω_o.z is the same dot product. `object`: the G-buffer holds the
+// mesh there (background.comp's test).
+bool listed_at(ivec2 p, out vec3 n, out bool object) {
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
     vec4 N = imageLoad(gnrm, q);
     n = normalize(N.xyz);
+    object = N.w > 0.5;
     return inside(p) && N.w >= 0.5 && dot(-camera_ray(q), n) > 0.0;
 }
 
@@ -52,13 +63,23 @@ bool listed_at(ivec2 p, out vec3 n) {
 // read and tested the other three again (with their tangent frames) to choose its representative.
 // The same lists in another order: the same images, bit for bit.
 void main() {
+    DiffuseLight d;
+    READ_DIFFUSE_LIGHT(d, sh, lights, pc.params.x != 0u);
+    bool diffuse = pc.params.y != 0u;
     ivec2 c = ivec2(gl_GlobalInvocationID.xy);
     ivec2 rep = ivec2(-1);
     [[unroll]] for (int k = 0; k < 4; k++) {
         ivec2 p = 2 * c + ivec2(k & 1, k >> 1);
         vec3 normal;
-        bool listed = listed_at(p, normal);
-        if (inside(p)) imageStore(normals, p, vec4(normal, listed ? 1.0 : 0.0));
+        bool object;
+        bool listed = listed_at(p, normal, object);
+        if (inside(p)) {
+            imageStore(normals, p, vec4(normal, listed ? 1.0 : 0.0));
+            vec4 acc = vec4(0.0, 0.0, 0.0, 1.0);
+            if (!object) acc = vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), 0.0).rgb, 0.0);
+            if (diffuse && listed) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, normal);
+            imageStore(accum, p, acc);
+        }
         APPEND(pixels, listed, uint(p.x) | (uint(p.y) << 16));
         if (listed && rep.x < 0) rep = p;
     }

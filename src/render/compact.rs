@@ -1,6 +1,8 @@
 //! The list of the mesh view's shaded pixels (`compact.comp`), built once per G-buffer: the lobe and
 //! `mis` passes are dispatched over it instead of over the image, so no vector of lanes is spent on
 //! pixels off the mesh (on llvmpipe those still ran one round of every loop). Images are unchanged.
+//! The same pass starts the frame's image (the background and diffuse passes' work) in a frame that
+//! rasterises.
 
 use ash::vk;
 
@@ -10,11 +12,15 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 4] = [
+const BINDINGS: [vk::DescriptorType; 8] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
 ];
 
 /// Invocations per group of the passes dispatched over the list (their `local_size_x`).
@@ -59,9 +65,15 @@ impl CompactPass {
         Ok(CompactPass { pipeline })
     }
 
-    /// Rebuilds the list of `rec.targets` from its G-buffer (after the G-buffer pass).
-    pub fn record(&self, rec: &Recording<'_>) -> Result<()> {
+    /// Rebuilds the list of `rec.targets` from its G-buffer (after the G-buffer pass), and starts the
+    /// frame's image as the background pass would, plus (`diffuse`: the albedo, and whether the
+    /// `key` estimator's lights are added) the diffuse pass's term: in the same pass over the
+    /// G-buffer, one read of it a pixel instead of three.
+    pub fn record(&self, rec: &Recording<'_>, diffuse: Option<([f64; 3], bool)>) -> Result<()> {
         let (ctx, cmd, t) = (rec.ctx, rec.cmd, rec.targets);
+        let env = rec.env()?;
+        let keys = env.keys.as_ref().filter(|_| diffuse.is_some_and(|d| d.1));
+        t.start_accum(ctx, cmd);
         let set = rec.set(
             &self.pipeline,
             &[
@@ -69,8 +81,19 @@ impl CompactPass {
                 Binding::Storage(&t.pixels),
                 Binding::Storage(&t.blocks),
                 Binding::StorageImage(t.pixel_normals.view),
+                Binding::StorageImage(t.accum.view),
+                Binding::Sampled(env.texture.view, env.sampler),
+                Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
+                // The lights (a stand-in with none).
+                Binding::Storage(keys.map_or(&env.sh, |k| &k.cones)),
             ],
         )?;
+        let mut push = rec.push;
+        if let Some((albedo, _)) = diffuse {
+            push.fparams = [albedo[0] as f32, albedo[1] as f32, albedo[2] as f32, 0.0];
+            push.params[1] = 1;
+        }
+        push.params[0] = u32::from(keys.is_some());
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
         barrier::memory(ctx, cmd, (LIST_READ.0, vk::AccessFlags2::NONE), barrier::TRANSFER_WRITE);
         let header: [u32; 4] = [0, 0, 1, 1];
@@ -82,10 +105,8 @@ impl CompactPass {
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
         t.pixel_normals.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
-        self.pipeline.bind(ctx, cmd, set, bytemuck::bytes_of(&rec.push));
-        // SAFETY: `cmd` is recording with the compute pipeline bound. One invocation a 2 × 2 block, 8 × 8
-        // invocations a group.
-        unsafe { ctx.raw().cmd_dispatch(cmd, t.width.div_ceil(16), t.height.div_ceil(16), 1) };
+        // One invocation a 2 × 2 block, 8 × 8 invocations a group; the image's readers after it.
+        rec.dispatch_groups(&self.pipeline, set, &push, (t.width.div_ceil(16), t.height.div_ceil(16)));
         barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);
         Ok(())
     }

@@ -345,11 +345,15 @@ impl Renderer {
         }
         let mesh = self.mesh.as_ref().expect("checked above");
         let vp = settings.camera.view_proj(w, h);
+        // The diffuse pass's term, where the frame has one.
+        let diffuse = (settings.estimator != Estimator::Mis && material.diffuse.iter().any(|&d| d != 0.0))
+            .then_some((material.diffuse, key));
         if raster {
-            // The list of shaded pixels belongs to the G-buffer: built with it, timed with it.
+            // The list of shaded pixels belongs to the G-buffer: built with it, timed with it, and the
+            // same pass starts the image (`CompactPass::record`): no background and diffuse passes.
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
-                passes.compact.record(&rec)
+                passes.compact.record(&rec, diffuse)
             })?;
         }
         // A frame that keeps the G-buffer starts from the image the background and diffuse passes
@@ -364,7 +368,7 @@ impl Renderer {
                 targets.restore_base(ctx, cmd);
                 Ok(())
             })?;
-        } else {
+        } else if !raster {
             ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
         }
         match settings.estimator {
@@ -373,8 +377,8 @@ impl Renderer {
                 ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, offset, settings.spp, material_buf, seq))?;
             }
             Estimator::Fis | Estimator::Plain | Estimator::Key => {
-                if !restored && material.diffuse.iter().any(|&d| d != 0.0) {
-                    ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, material.diffuse, key))?;
+                if let Some((albedo, residual)) = diffuse.filter(|_| !restored && !raster) {
+                    ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, albedo, residual))?;
                 }
                 if !restored && base_key.is_some() {
                     ts.time(ctx, cmd, "base.save", || {
