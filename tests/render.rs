@@ -896,6 +896,14 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
         // (kept) frame in the diffuse pass, bit for bit alike.
         let (drawn, g) = frame(&mut r, &other, &s);
         let (redrawn, h) = frame(&mut r, &other, &s);
+        // The same on a map with a key light, whose power `key`'s diffuse term adds (and `fis`'s not).
+        r.set_environment(&env("studio.exr")).unwrap();
+        let (lit_drawn, lit_g) = frame(&mut r, &other, &moved);
+        let (lit_redrawn, lit_h) = frame(&mut r, &other, &moved);
+        r.set_environment(&env("venice.exr")).unwrap();
+        assert!(has(&lit_drawn, "gbuffer") && !has(&lit_drawn, "diffuse"), "{lit_drawn:?}");
+        assert!(has(&lit_redrawn, "diffuse"), "{lit_redrawn:?}");
+        assert_eq!(lit_g.pixels, lit_h.pixels, "{estimator:?}: studio's diffuse term drawn in either pass");
         assert!(has(&first, "gbuffer") && !has(&first, "base.save"), "{first:?}");
         assert!(!has(&second, "gbuffer") && has(&second, "background") && has(&second, "base.save"), "{second:?}");
         assert!(has(&kept, "base") && !has(&kept, "background") && !has(&kept, "diffuse"), "{kept:?}");

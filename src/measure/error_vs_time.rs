@@ -1,7 +1,9 @@
 //! `report error-vs-time`: for scenes (environment × material) and sample counts, each estimator's
 //! GPU time (timestamps, median of repeated frames taken in rounds that interleave a scene's
 //! estimators and sample counts; the shading passes, without the G-buffer and background that every
-//! estimator shares) and its error against the converged CPU reference
+//! estimator shares: the sweep's frames rasterise, so since session 22 their `gbuffer` pass also
+//! draws the background, and it would draw a diffuse term, which the sweep's materials do not have)
+//! and its error against the converged CPU reference
 //! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
 //! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
 //! (log–log: the error–time frontier of each estimator) and `error-vs-time.md` (the default `key`
