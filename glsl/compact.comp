@@ -21,26 +21,22 @@ layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3];
 // (in the order (0, 0), (1, 0), (0, 1), (1, 1)): the pixel whose samples a sparse filtered lobe
 // pass takes for the block (`denoise::sparse`).
 layout(std430, set = 0, binding = 2) buffer Blocks { uint count; uint groups[3]; uint at[]; } blocks;
-// Every pixel's shading normal, alpha 1 where listed (0 elsewhere): what the sparse filter reads.
-layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D normals;
 // The frame's image, started here in a frame that rasterises (background.comp and diffuse.comp
 // otherwise): the environment (level 0) behind the object with alpha 0, (0, 0, 0, 1) on it, plus the
 // diffuse term at the listed pixels where params.y = 1 (albedo fparams.rgb, params.x the key
 // estimator's lights, as diffuse.comp takes them).
-layout(set = 0, binding = 4, rgba32f) writeonly uniform image2D accum;
-layout(set = 0, binding = 5) uniform sampler2D env_tex;
-layout(std430, set = 0, binding = 6) readonly buffer Sh { vec4 c[9]; } sh;
-layout(std430, set = 0, binding = 7) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
+layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D accum;
+layout(set = 0, binding = 4) uniform sampler2D env_tex;
+layout(std430, set = 0, binding = 5) readonly buffer Sh { vec4 c[9]; } sh;
+layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
 
-// Whether pixel p (inside the image or not) is listed, and its unit normal: `shaded` in pass.glsl
-// without the tangent frame, whose ω_o.z is the same dot product. `object`: the G-buffer holds the
-// mesh there (background.comp's test).
+// Whether pixel p (inside the image or not) is listed (`facing` in pass.glsl), and its unit normal.
+// `object`: the G-buffer holds the mesh there (background.comp's test).
 bool listed_at(ivec2 p, out vec3 n, out bool object) {
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
     vec4 N = imageLoad(gnrm, q);
-    n = normalize(N.xyz);
     object = N.w > 0.5;
-    return inside(p) && N.w >= 0.5 && dot(-camera_ray(q), n) > 0.0;
+    return facing(q, N, n) && inside(p);
 }
 
 // Appends `value` where `take` (one atomic per subgroup: its lanes that take consecutive places).
@@ -74,7 +70,6 @@ void main() {
         bool object;
         bool listed = listed_at(p, normal, object);
         if (inside(p)) {
-            imageStore(normals, p, vec4(normal, listed ? 1.0 : 0.0));
             vec4 acc = vec4(0.0, 0.0, 0.0, 1.0);
             if (!object) acc = vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), 0.0).rgb, 0.0);
             if (diffuse && listed) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, normal);

@@ -46,6 +46,14 @@ bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
     return N.w >= 0.5 && wo.z > 0.0;
 }
 
+// Whether the G-buffer texel N at pixel q holds the mesh facing the eye, and its unit normal: the
+// test of `shaded` without the tangent frame (its ω_o.z is this same dot product), which
+// `compact.comp` lists by and the sparse filter (`denoise_sparse.comp`) takes again.
+bool facing(ivec2 q, vec4 N, out vec3 n) {
+    n = normalize(N.xyz);
+    return N.w >= 0.5 && dot(-camera_ray(q), n) > 0.0;
+}
+
 #ifdef PIXELS_BINDING
 // The list `compact.comp` made, dispatched over in groups of 64 (`Recording::dispatch_listed`).
 layout(std430, set = 0, binding = PIXELS_BINDING) readonly buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;

@@ -12,11 +12,10 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 8] = [
+const BINDINGS: [vk::DescriptorType; 7] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -80,7 +79,6 @@ impl CompactPass {
                 Binding::StorageImage(t.normal.view),
                 Binding::Storage(&t.pixels),
                 Binding::Storage(&t.blocks),
-                Binding::StorageImage(t.pixel_normals.view),
                 Binding::StorageImage(t.accum.view),
                 Binding::Sampled(env.texture.view, env.sampler),
                 Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
@@ -104,7 +102,6 @@ impl CompactPass {
             ctx.raw().cmd_update_buffer(cmd, t.blocks.raw, 0, bytemuck::cast_slice(&header));
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
-        t.pixel_normals.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         // One invocation a 2 × 2 block, 8 × 8 invocations a group; the image's readers after it.
         rec.dispatch_groups(&self.pipeline, set, &push, (t.width.div_ceil(16), t.height.div_ceil(16)));
         barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);

@@ -197,7 +197,7 @@ impl DenoisePass {
                     Binding::StorageImage(t.cells.view),
                     Binding::StorageImage(t.accum.view),
                     Binding::StorageImage(t.cells_light.view),
-                    Binding::StorageImage(t.pixel_normals.view),
+                    Binding::StorageImage(t.normal.view),
                 ],
             )?;
             rec.dispatch_groups(&self.sparse, set, &push, sparse_groups(t.width, t.height));

@@ -26,10 +26,6 @@ pub struct Targets {
     pub cells: Image,
     /// Their light terms (the lights' points), one texel a block, interpolated by the filter.
     pub cells_light: Image,
-    /// Every pixel's shading normal (xyz) and 1 in alpha where it is shaded, 0 elsewhere: written by
-    /// `compact` with the list, read by the sparse filter (one image load a pixel in place of the
-    /// G-buffer's and its test).
-    pub pixel_normals: Image,
     /// The shaded pixels of the G-buffer, listed by `compact` (the mesh view's diffuse, lobe and `mis` passes
     /// run over it).
     pub pixels: Buffer,
@@ -87,7 +83,6 @@ impl Targets {
             };
             made.push(cells("rough.cells")?);
             made.push(cells("rough.cells_light")?);
-            made.push(rgba(vk::ImageUsageFlags::empty(), "gbuffer.pixel_normals")?);
             let pixels = super::compact::list_buffer(ctx, u64::from(width) * u64::from(height), "pixels")?;
             match super::compact::list_buffer(ctx, u64::from(half.0) * u64::from(half.1), "blocks") {
                 Ok(blocks) => Ok((pixels, blocks)),
@@ -107,7 +102,7 @@ impl Targets {
             }
         };
         let mut it = made.into_iter();
-        let mut next = || it.next().expect("ten images were made");
+        let mut next = || it.next().expect("nine images were made");
         Ok(Targets {
             width,
             height,
@@ -120,7 +115,6 @@ impl Targets {
             mid: next(),
             cells: next(),
             cells_light: next(),
-            pixel_normals: next(),
             pixels,
             blocks,
             gbuffer_of: None,
@@ -165,7 +159,6 @@ impl Targets {
             self.mid,
             self.cells,
             self.cells_light,
-            self.pixel_normals,
         ] {
             i.destroy(ctx);
         }
