@@ -48,7 +48,10 @@ bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
 
 // Whether the G-buffer texel N at pixel q holds the mesh facing the eye, and its unit normal: the
 // test of `shaded` without the tangent frame (its ω_o.z is this same dot product), which
-// `compact.comp` lists by and the sparse filter (`denoise_sparse.comp`) takes again.
+// `compact.comp` lists by and the sparse filter (`denoise_sparse.comp`) takes again. The two agree
+// where the compiler rounds this same code alike in both (llvmpipe does: the images are the same
+// bit for bit); a driver that fused it differently could disagree only where the dot product is
+// within rounding of 0, at the silhouette.
 bool facing(ivec2 q, vec4 N, out vec3 n) {
     n = normalize(N.xyz);
     return N.w >= 0.5 && dot(-camera_ray(q), n) > 0.0;
