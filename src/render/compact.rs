@@ -71,7 +71,11 @@ impl CompactPass {
     pub fn record(&self, rec: &Recording<'_>, diffuse: Option<([f64; 3], bool)>) -> Result<()> {
         let (ctx, cmd, t) = (rec.ctx, rec.cmd, rec.targets);
         let env = rec.env()?;
-        let keys = env.keys.as_ref().filter(|_| diffuse.is_some_and(|d| d.1));
+        let mut push = rec.push;
+        // Without a diffuse term: zero albedo, no lights, and params[1] 0 skips the term.
+        let (albedo, residual) = diffuse.unwrap_or(([0.0; 3], false));
+        let [sh, lights] = super::diffuse::term(env, albedo, residual, &mut push);
+        push.params[1] = u32::from(diffuse.is_some());
         t.start_accum(ctx, cmd);
         let set = rec.set(
             &self.pipeline,
@@ -81,17 +85,10 @@ impl CompactPass {
                 Binding::Storage(&t.blocks),
                 Binding::StorageImage(t.accum.view),
                 Binding::Sampled(env.texture.view, env.sampler),
-                Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
-                // The lights (a stand-in with none).
-                Binding::Storage(keys.map_or(&env.sh, |k| &k.cones)),
+                Binding::Storage(sh),
+                Binding::Storage(lights),
             ],
         )?;
-        let mut push = rec.push;
-        if let Some((albedo, _)) = diffuse {
-            push.fparams = [albedo[0] as f32, albedo[1] as f32, albedo[2] as f32, 0.0];
-            push.params[1] = 1;
-        }
-        push.params[0] = u32::from(keys.is_some());
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
         barrier::memory(ctx, cmd, (LIST_READ.0, vk::AccessFlags2::NONE), barrier::TRANSFER_WRITE);
         let header: [u32; 4] = [0, 0, 1, 1];

@@ -3,9 +3,12 @@
 
 use ash::vk;
 
+use super::environment::GpuEnvironment;
+use super::gpu::Push;
 use super::Recording;
 use crate::vk::descriptor::Binding;
 use crate::vk::pipeline::Pipeline;
+use crate::vk::Buffer;
 use crate::vk::Context;
 use crate::Result;
 
@@ -16,6 +19,17 @@ const BINDINGS: [vk::DescriptorType; 5] = [
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
+
+/// What the diffuse term reads (`glsl/include/diffuse.glsl`, in this pass and in the G-buffer's,
+/// `CompactPass`): the SH9 coefficients and the key lights' cones (`residual`: the `key` estimator's,
+/// where the map has key lights; the coefficients stand in for the lights otherwise), and its push
+/// constants: the albedo in `fparams`, whether the lights are added in `params[0]`.
+pub fn term<'a>(env: &'a GpuEnvironment, albedo: [f64; 3], residual: bool, push: &mut Push) -> [&'a Buffer; 2] {
+    let keys = env.keys.as_ref().filter(|_| residual);
+    push.fparams = [albedo[0] as f32, albedo[1] as f32, albedo[2] as f32, 0.0];
+    push.params[0] = u32::from(keys.is_some());
+    [keys.map_or(&env.sh, |k| &k.sh), keys.map_or(&env.sh, |k| &k.cones)]
+}
 
 pub struct DiffusePass {
     pipeline: Pipeline,
@@ -31,22 +45,18 @@ impl DiffusePass {
     /// distant source, `power · max(n·d, 0)` (the `key` estimator).
     pub fn record(&self, rec: &Recording<'_>, diffuse: [f64; 3], residual: bool) -> Result<()> {
         let t = rec.targets;
-        let env = rec.env()?;
-        let keys = env.keys.as_ref().filter(|_| residual);
+        let mut push = rec.push;
+        let [sh, lights] = term(rec.env()?, diffuse, residual, &mut push);
         let set = rec.set(
             &self.pipeline,
             &[
                 Binding::StorageImage(t.normal.view),
                 Binding::StorageImage(t.accum.view),
-                Binding::Storage(keys.map_or(&env.sh, |k| &k.sh)),
-                // The lights (a stand-in with none).
-                Binding::Storage(keys.map_or(&env.sh, |k| &k.cones)),
+                Binding::Storage(sh),
+                Binding::Storage(lights),
                 Binding::Storage(&t.pixels),
             ],
         )?;
-        let mut push = rec.push;
-        push.fparams = [diffuse[0] as f32, diffuse[1] as f32, diffuse[2] as f32, 0.0];
-        push.params[0] = u32::from(keys.is_some());
         rec.dispatch_over(&t.pixels, &self.pipeline, set, &push);
         Ok(())
     }
