@@ -16,8 +16,13 @@
 // and skip nothing (an unmarked block weighs 0): on llvmpipe the same loops with a `continue` cost
 // twice as much (README, session 20). The pixel's own block is always marked (its list holds every
 // block with a shaded pixel); where every weight underflows, the pixel takes that block's values.
+//
+// Dispatched over `compact.comp`'s list of blocks (those with a shaded pixel), not over the image:
+// llvmpipe runs both sides of an `if` (pass.glsl), so a vector of blocks off the mesh ran the whole
+// filter, masked. Session 23, 512² (the bench's goal scene): see README.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
+#define PIXELS_BINDING 4
 #include "pass.glsl"
 // The window's radius in pixels (`denoise::RADIUS`): its blocks, 4 along an odd coordinate, are
 // written out below.
@@ -25,8 +30,8 @@
 #if R != 3
 #error "the window's blocks below are those within 3 pixels"
 #endif
-// Over the blocks (`denoise::sparse_groups`).
-layout(local_size_x = 8, local_size_y = 8) in;
+// Over the list of blocks, each by its first shaded pixel (`compact.comp`).
+layout(local_size_x = 64) in;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D cells;
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
@@ -119,14 +124,13 @@ void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec
 }
 
 void main() {
-    ivec2 b = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 first;
+    if (!listed_pixel(first)) return;
+    ivec2 b = first / 2;
     ivec2 blocks = ivec2((pc.size.xy + 1u) / 2u);
-    if (b.x >= blocks.x || b.y >= blocks.y) return;
     ivec2 p = 2 * b;
     vec3 n0, n1, n2, n3;
     bool s0 = pixel_normal(p, n0), s1 = pixel_normal(p + ivec2(1, 0), n1);
     bool s2 = pixel_normal(p + ivec2(0, 1), n2), s3 = pixel_normal(p + ivec2(1, 1), n3);
-    // An `if`, not an early return: a vector of blocks off the mesh then skips the body on
-    // llvmpipe (pass.glsl's note on loops; a return only masks the lanes).
-    if (s0 || s1 || s2 || s3) filter_block(b, p, blocks, n0, n1, n2, n3, s0, s1, s2, s3);
+    filter_block(b, p, blocks, n0, n1, n2, n3, s0, s1, s2, s3);
 }

@@ -5,6 +5,7 @@
 // material 4.2 → 3.0 ms (`key`), 3.1 → 2.2 (`fis`) against the image-wide dispatch with early
 // returns, alternating binaries; the same pixels, the same image.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #define PIXELS_BINDING 4
 #include "pass.glsl"
 #include "diffuse.glsl"

@@ -15,17 +15,18 @@ vec3 irradiance(vec3 c[9], vec3 n) {
 }
 
 // The coefficients and the lights (`with_lights`: the key estimator's; zero power past their count),
-// read where no lane is masked off: llvmpipe broadcasts a uniform storage-buffer read only there
-// (issue 10's profile: 27 → 4.4 ms at 512²).
+// read where no lane is masked off and at constant indices: llvmpipe broadcasts a uniform
+// storage-buffer read only there (issue 10's profile: 27 → 4.4 ms at 512²). The lights' table holds
+// 4 lights (`environment::cone_table`); without lights the SH coefficients stand in for it (9 vec4,
+// as long as the count and the 4 lights: `diffuse::term`).
 struct DiffuseLight { vec3 c[9]; vec4 dir[4]; vec4 power[4]; };
 #define READ_DIFFUSE_LIGHT(out_d, sh_buffer, lights_buffer, with_lights)                               \
     {                                                                                                  \
         for (int k = 0; k < 9; k++) out_d.c[k] = sh_buffer.c[k].rgb;                                   \
         uint n_ = with_lights ? min(lights_buffer.count.x, 4u) : 0u;                                    \
-        for (uint k = 0u; k < 4u; k++) {                                                               \
-            uint j = min(k, max(n_, 1u) - 1u);                                                          \
-            out_d.dir[k] = with_lights ? lights_buffer.v[2u * j] : vec4(0.0);                           \
-            out_d.power[k] = with_lights && k < n_ ? lights_buffer.v[2u * j + 1u] : vec4(0.0);          \
+        [[unroll]] for (uint k = 0u; k < 4u; k++) {                                                    \
+            out_d.dir[k] = with_lights ? lights_buffer.v[2u * k] : vec4(0.0);                           \
+            out_d.power[k] = with_lights && k < n_ ? lights_buffer.v[2u * k + 1u] : vec4(0.0);          \
         }                                                                                              \
     }
 

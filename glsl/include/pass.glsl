@@ -2,16 +2,20 @@
 // G-buffer access of the mesh passes.
 //
 // Loops and branches on llvmpipe (Mesa 22.3, the machine every test runs on), which shape these
-// shaders: an `if` runs both sides for an 8-lane vector whose lanes disagree, under an execution
-// mask, and an early `return` only masks what follows; a side that no lane of the vector takes is
-// skipped (measured in session 13: a 64-round body under a condition false everywhere cost 1.6 ms
-// at 512² against 68 ms when taken). A loop is a real branch too: its body
-// always runs once, and it goes round again while any lane is still active. So a `for (i < n)` loop
-// costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here are
-// do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2 bodies,
-// identical images). Code that only some samples need costs its full price in every sample unless
-// it moves out of the sample loop into a loop of its own, which runs once for a vector that needs
-// none of it (lobe.comp's `light_hits`).
+// shaders: an `if` is an execution mask and no branch (`lp_bld_nir_soa.c` `if_cond`), so both of
+// its sides run for every 8-lane vector, masked, whatever its lanes take, even where the condition
+// is the same for the whole dispatch (a push constant); an early `return` only masks what follows.
+// (Some operations cost less under a mask: image, texel and storage-buffer accesses go lane by
+// lane there and skip masked lanes.) Code a dispatch does not need must go by a specialisation
+// constant (lobe.comp's OUTPUT, session 23) or by dispatching over a list of the pixels that need
+// it (compact.comp). A loop is the one real branch: its body always runs once, and it goes round
+// again while any lane is still active (session 13: a 64-round loop under a condition false
+// everywhere cost 1.6 ms at 512² against 68 ms when taken: one masked round). So a `for (i < n)`
+// loop costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here
+// are do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2
+// bodies, identical images). Code that only some samples need costs its full price in every
+// sample unless it moves out of the sample loop into a loop of its own, which runs one masked
+// round for a vector that needs none of it (lobe.comp's `light_hits`).
 #ifndef PASS_GLSL
 #define PASS_GLSL
 #include "common.glsl"

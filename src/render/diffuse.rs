@@ -25,6 +25,9 @@ const BINDINGS: [vk::DescriptorType; 5] = [
 /// where the map has key lights; the coefficients stand in for the lights otherwise), and its push
 /// constants: the albedo in `fparams`, whether the lights are added in `params[0]`.
 pub fn term<'a>(env: &'a GpuEnvironment, albedo: [f64; 3], residual: bool, push: &mut Push) -> [&'a Buffer; 2] {
+    // The coefficients' 9 vec4 stand in for the lights' table, which `diffuse.glsl` reads whole at
+    // constant indices: the count and 4 lights of 2 vec4.
+    const _: () = assert!(9 * 16 >= 16 + 2 * 16 * crate::scene::keylight::MAX_LIGHTS);
     let keys = env.keys.as_ref().filter(|_| residual);
     push.fparams = [albedo[0] as f32, albedo[1] as f32, albedo[2] as f32, 0.0];
     push.params[0] = u32::from(keys.is_some());

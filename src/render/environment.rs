@@ -444,10 +444,14 @@ impl GpuKeyLights {
     }
 }
 
-/// The `Lights` buffer of `keylight.comp` (see [`GpuKeyLights::cones`]).
+/// The `Lights` buffer of `keylight.comp` (see [`GpuKeyLights::cones`]): the count, then
+/// `keylight::MAX_LIGHTS` lights (at least), the last repeated past the count, so that the shaders
+/// read them at constant indices (`lobe.comp`, `diffuse.glsl`; the lights past the count add no
+/// power there and repeat a cone the reach test already has).
 pub fn cone_table(lights: &[crate::scene::keylight::KeyLight]) -> Vec<f32> {
     let mut out: Vec<f32> = vec![f32::from_bits(lights.len() as u32), 0.0, 0.0, 0.0];
-    for l in lights {
+    let padding = crate::scene::keylight::MAX_LIGHTS.saturating_sub(lights.len());
+    for l in lights.iter().chain(std::iter::repeat_n(lights.last(), padding).flatten()) {
         let d = l.direction;
         out.extend_from_slice(&[d.x as f32, d.y as f32, d.z as f32, l.extent.cos() as f32]);
         out.extend_from_slice(&[l.power[0] as f32, l.power[1] as f32, l.power[2] as f32, l.extent as f32]);

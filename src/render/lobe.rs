@@ -62,6 +62,31 @@ pub struct Variant {
     /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe.comp` `sees_lights`);
     /// with `wide`, the test reads the key and wide lights' cones (`GpuWideLights::cones`).
     pub reach: bool,
+    /// Where the pass writes ([`Into::output`]): a constant of the pipeline, not a push constant,
+    /// because llvmpipe runs both sides of every `if` (see [`Output`]).
+    pub output: Output,
+}
+
+/// Where a lobe pass writes, `lobe.comp`'s `OUTPUT`: the accumulation image, the dense filter's
+/// `rough`, the sparse filter's cells (the light term a block into `cells_light`), or the cells
+/// with the light term at each pixel of a block.
+///
+/// A specialisation constant because llvmpipe (Mesa 22.3, `lp_bld_nir_soa.c` `if_cond`) compiles an
+/// `if` to an execution mask and no branch: both sides run for every vector, whatever its lanes
+/// take, even where the condition is the same for the whole dispatch. Only a loop is a real branch
+/// (it goes round again while a lane is active). As push constants, the other outputs' code ran
+/// masked in every pass: the sparse passes ran the light term of all four pixels of a block even
+/// where they took it once a block, and the dense tail as well. Session 23, 512², the bench's goal
+/// scene (`assets/bench-4lobes.brdf.json` on studio, `key` 8 spp; three rounds of alternating
+/// binaries, medians of 7 frames): the three lobes that take their light term once a block
+/// 4.6–5.4 → 4.0–4.6, 6.5–7.3 → 5.5–5.8 and 6.1–6.9 → 5.5–6.0 ms; the same images bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Output {
+    #[default]
+    Accum,
+    Rough,
+    Cells,
+    CellsPixelLights,
 }
 
 /// `lobe.comp`'s `REACH`: past the reach of [`reach_half_angles`] a lobe's exponent exceeds `REACH²`,
@@ -146,6 +171,7 @@ impl Variant {
             points: false,
             wide: false,
             reach: false,
+            output: Output::Accum,
         }
     }
 
@@ -172,8 +198,14 @@ impl Variant {
         flags.join(",")
     }
 
-    fn constants(&self) -> [u32; 12] {
-        [
+    fn constants(&self) -> [u32; 13] {
+        let output = match self.output {
+            Output::Accum => 0,
+            Output::Rough => 1,
+            Output::Cells => 2,
+            Output::CellsPixelLights => 3,
+        };
+        let flags = [
             self.aniso,
             self.rotated,
             self.split,
@@ -187,7 +219,10 @@ impl Variant {
             self.points,
             self.reach,
         ]
-        .map(u32::from)
+        .map(u32::from);
+        let mut constants = [output; 13];
+        constants[..12].copy_from_slice(&flags);
+        constants
     }
 }
 
@@ -234,6 +269,18 @@ pub enum Into {
     /// of the block's pixels, into the accumulation image, instead of once a block into
     /// `Targets::cells_light` ([`super::denoise::pixel_lights`]).
     Cells { pixel_lights: bool },
+}
+
+impl Into {
+    /// The pipeline's [`Output`] for this destination.
+    pub fn output(self) -> Output {
+        match self {
+            Into::Accum => Output::Accum,
+            Into::Rough { .. } => Output::Rough,
+            Into::Cells { pixel_lights: false } => Output::Cells,
+            Into::Cells { pixel_lights: true } => Output::CellsPixelLights,
+        }
+    }
 }
 
 /// Called on the building thread when a pipeline built in the background is ready.
@@ -364,6 +411,9 @@ impl LobePass {
         let Some(pipeline) = self.pipelines.get(&variant) else {
             return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} was not prepared")));
         };
+        if variant.output != into.output() {
+            return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} does not write {into:?}")));
+        }
         let t = rec.targets;
         let env = rec.env()?;
         let keys = env.keys.as_ref().filter(|_| variant.lights);
@@ -424,7 +474,8 @@ impl LobePass {
         let samples = if cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
         push.params = [index, samples, seed, m];
         // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
-        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel.
+        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel (only 1 against 2 is
+        // read: the rest is the pipeline's `Output`).
         let mode = match into {
             Into::Accum => 0.0,
             Into::Rough { strata: true } => 1.0,

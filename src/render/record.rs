@@ -202,7 +202,7 @@ impl Renderer {
         let lights = key_lights.is_some();
         // A lobe too narrow for the lights' own points sees them as tiles where those fit.
         let mut tiles: Vec<(u32, Vec<[f32; 8]>)> = Vec::new();
-        let lobes: Vec<(u32, lobe::Variant)> = material
+        let mut lobes: Vec<(u32, lobe::Variant)> = material
             .lobes
             .iter()
             .enumerate()
@@ -255,6 +255,25 @@ impl Renderer {
                 )
             })
             .collect();
+        // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`): the rough
+        // lobes the filter takes (`denoise::fits`), sampled once a 2 × 2 block in sparse frames.
+        let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
+        let floor = denoise::min_alpha(sparse, w, h);
+        let intos: Vec<lobe::Into> = lobes
+            .iter()
+            .map(|(i, v)| {
+                let l = &material.lobes[*i as usize];
+                let filtered = self.denoise && v.key && denoise::fits(l, v.lights && !v.points, floor);
+                match (filtered, sparse) {
+                    (false, _) => lobe::Into::Accum,
+                    (true, true) => lobe::Into::Cells { pixel_lights: denoise::pixel_lights(l, w, h) },
+                    (true, false) => lobe::Into::Rough { strata: self.stratified_shifts },
+                }
+            })
+            .collect();
+        for ((_, v), into) in lobes.iter_mut().zip(&intos) {
+            v.output = into.output();
+        }
         if mesh_view {
             self.buffers_for(offset.saturating_add(settings.spp), settings.spp, settings.estimator)?;
             if settings.estimator != Estimator::Mis {
@@ -388,21 +407,11 @@ impl Renderer {
                 }
                 let halton = &self.halton.as_ref().expect("made above").1;
                 // (Refinement frames are `mis` frames: a `key` frame is whole.)
-                let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
-                let floor = denoise::min_alpha(sparse, w, h);
-                // The rough lobes the filter takes (`denoise::fits`), and the smallest α among them.
-                let filtered: Vec<bool> = lobes
-                    .iter()
-                    .map(|(i, v)| {
-                        self.denoise
-                            && v.key
-                            && denoise::fits(&material.lobes[*i as usize], v.lights && !v.points, floor)
-                    })
-                    .collect();
+                // The smallest α among the lobes the filter takes.
                 let min_alpha = lobes
                     .iter()
-                    .zip(&filtered)
-                    .filter(|(_, &f)| f)
+                    .zip(&intos)
+                    .filter(|(_, into)| **into != lobe::Into::Accum)
                     .map(|((i, _), _)| {
                         let l = &material.lobes[*i as usize];
                         l.alpha_x.min(l.alpha_y)
@@ -417,15 +426,7 @@ impl Renderer {
                         targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
                     }
                 }
-                for (&(i, v), &f) in lobes.iter().zip(&filtered) {
-                    let into = match (f, sparse) {
-                        (false, _) => lobe::Into::Accum,
-                        (true, true) => {
-                            let l = &material.lobes[i as usize];
-                            lobe::Into::Cells { pixel_lights: denoise::pixel_lights(l, w, h) }
-                        }
-                        (true, false) => lobe::Into::Rough { strata: self.stratified_shifts },
-                    };
+                for (&(i, v), &into) in lobes.iter().zip(&intos) {
                     let name = match tiles.iter().find(|t| t.0 == i) {
                         Some((_, rows)) => format!("lobe{i}[{},tiles {}]", v.tag(), rows.len()),
                         None => format!("lobe{i}[{}]", v.tag()),
