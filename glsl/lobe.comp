@@ -73,10 +73,12 @@ layout(constant_id = 9) const bool LIGHTS = false;   // KEY with key lights: the
 layout(constant_id = 10) const bool POINTS = false;  // LIGHTS as quadrature points (a lobe much wider than the lights)
 layout(constant_id = 11) const bool REACH_TEST = false;  // LIGHTS, one narrow component: skip the lights out of reach
 // Where the pass writes (`lobe::Output`): 0 the accumulation image, 1 `rough` (FILTERED), 2 the
-// sparse cells (SPARSE), 3 the cells with the light term at each pixel. A constant, not a push
-// constant: llvmpipe runs both sides of every `if` (pass.glsl), so the other outputs' code would
-// run, masked, in every pass (session 23: `lobe::Output`).
+// sparse cells (SPARSE), 3 the cells with the light term at each pixel; 4 any of them, as fparams.y
+// says (0, 1 or 2, 3, 4: the editor's stand-in while a view's own pipeline is built). A constant,
+// not a push constant: llvmpipe runs both sides of every `if` (pass.glsl), so the other outputs'
+// code would run, masked, in every pass (session 23: `lobe::Output`).
 layout(constant_id = 12) const uint OUTPUT = 0u;
+const bool ANY_OUTPUT = OUTPUT == 4u;
 
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
@@ -616,12 +618,12 @@ void main() {
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
     // A lobe pass into the filter (OUTPUT 1; 2, 3 sparse: per block) shifts the set per pixel
     // instead, so that each pixel's quadrature error is its own (render/denoise.rs).
-    const bool filtered = OUTPUT != 0u;
+    bool filtered = ANY_OUTPUT ? pc.fparams.y > 0.5 : OUTPUT != 0u;
     uint seed = hash_u32(pc.params.z);
     // fparams.y 2: filtered with a hash per pixel at every count (`Renderer::stratified_shifts` off).
     // OUTPUT 2, 3: sparse, one pixel a 2 × 2 block (the blocks' list), into `cells`.
-    const bool sparse = OUTPUT >= 2u;
-    bool strata = OUTPUT == 1u && pc.fparams.y < 1.5 && pc.params.y <= FEW_SAMPLES;
+    bool sparse = ANY_OUTPUT ? pc.fparams.y > 2.5 : OUTPUT >= 2u;
+    bool strata = filtered && !sparse && pc.fparams.y < 1.5 && pc.params.y <= FEW_SAMPLES;
     if (filtered && !strata && !sparse) seed = hash_u32(seed ^ (uint(p.x) | (uint(p.y) << 16)));
     // Up to FEW_SAMPLES samples, the shifts are stratified over the filter's window of W × W
     // pixels: pixel p takes the stratum M (p mod W) of the W × W grid over [0, 1)², M = (5 1; 1 2),
@@ -669,7 +671,7 @@ void main() {
     // F and Σ p_c (halved) are the same as one view's, and the flag's branches fold away.
     g_lobe = l; g_lobe.flags.x = SPLIT ? 1u : 0u; g_wo = wo; g_n = n; g_light_sum = vec3(0.0);
     // OUTPUT 3: sparse, the light term at each pixel of the block (below) instead.
-    const bool pixel_lights = OUTPUT == 3u;
+    bool pixel_lights = ANY_OUTPUT ? pc.fparams.y > 3.5 : OUTPUT == 3u;
     bool lit = LIGHTS && !pixel_lights && (!REACH_TEST || sees_lights(f, l.shape, b));
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);

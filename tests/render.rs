@@ -1195,3 +1195,42 @@ fn stratified_shifts_beat_a_hash_per_pixel_at_one_sample() {
     r.ctx.check_validation().unwrap();
     assert!(failures.is_empty(), "{failures:?}");
 }
+
+/// The editor's stand-in lobe pipeline (`lobe::Output::Any`: the code of every output, the one to
+/// take read from the push constants, as every lobe pipeline was before session 23) draws what the
+/// view's own pipelines draw (`lobe::Output`, one output each), bit for bit, so a settle frame that
+/// takes the stand-in while its own pipelines are built shows the same image. Studio, `key` 8 spp:
+/// `assets/bench-4lobes.brdf.json` at 512² (sparse cells, its α 0.02 lobe with its light term at
+/// each pixel, the unfiltered accumulation) and at 48² (the dense filter's `rough`), and a rotated
+/// split lobe of α 0.18 at 128² (its light points at each pixel, two views).
+#[test]
+fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
+    let mut r = renderer();
+    r.set_environment(&env("studio.exr")).unwrap();
+    r.set_mesh(&Mesh::sphere()).unwrap();
+    let bench = Material::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench-4lobes.brdf.json")).unwrap();
+    let mut split = bench.clone();
+    split.lobes = vec![Lobe { split: true, rotation: DQuat::from_rotation_y(0.35), ..Lobe::isotropic([0.3; 3], 0.18) }];
+    let mut failures = Vec::new();
+    for (name, m, size, filter) in [
+        ("bench", &bench, 512, "denoise[sparse]"),
+        ("split", &split, 128, "denoise[sparse]"),
+        ("bench", &bench, 48, "denoise"),
+    ] {
+        let s = settings(size, 8, Estimator::Key);
+        r.any_output_lobes = false;
+        let own = r.render(m, &s).unwrap();
+        r.any_output_lobes = true;
+        let any = r.render(m, &s).unwrap();
+        r.any_output_lobes = false;
+        let names: Vec<&str> = own.timings.iter().map(|t| t.name.as_str()).collect();
+        assert!(names.contains(&filter), "{name} at {size}²: {names:?}");
+        assert_finite(name, &own.image);
+        if own.image.pixels != any.image.pixels {
+            let d = reference::relative_l1(&any.image, &own.image).unwrap_or(f64::NAN);
+            failures.push(format!("{name} at {size}²: the stand-in differs by {d:.3e} relative L1"));
+        }
+    }
+    r.ctx.check_validation().unwrap();
+    assert!(failures.is_empty(), "{failures:?}");
+}

@@ -80,6 +80,12 @@ pub struct Variant {
 /// scene (`assets/bench-4lobes.brdf.json` on studio, `key` 8 spp; three rounds of alternating
 /// binaries, medians of 7 frames): the three lobes that take their light term once a block
 /// 4.6–5.4 → 4.0–4.6, 6.5–7.3 → 5.5–5.8 and 6.1–6.9 → 5.5–6.0 ms; the same images bit for bit.
+///
+/// `Any` holds the code of every output and takes the one the push constants say: the editor's
+/// stand-in while a view's own pipeline is built ([`LobePass::ready`]). Which outputs a lobe takes
+/// depends on the view's size (`denoise::min_alpha`, `denoise::pixel_lights`), so a settle frame at
+/// full size after previews at a smaller one would otherwise wait for new pipelines; `Any` is the
+/// one pipeline a lobe needed before session 23, and draws the same image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Output {
     #[default]
@@ -87,6 +93,7 @@ pub enum Output {
     Rough,
     Cells,
     CellsPixelLights,
+    Any,
 }
 
 /// `lobe.comp`'s `REACH`: past the reach of [`reach_half_angles`] a lobe's exponent exceeds `REACH²`,
@@ -198,12 +205,26 @@ impl Variant {
         flags.join(",")
     }
 
+    /// Whether the lobe's output may differ with the view's size: a `key` lobe without MIS light
+    /// samples, which the filter takes where it is rough for the view (`denoise::fits`,
+    /// `denoise::min_alpha`), sparsely in larger views and with its light term at each pixel where it
+    /// is narrow for them (`denoise::pixel_lights`). Every other lobe writes the accumulation image.
+    pub fn outputs_vary(&self) -> bool {
+        self.key && (self.points || !self.lights)
+    }
+
+    /// The same variant with the code of every output ([`Output::Any`]).
+    pub fn any_output(self) -> Variant {
+        Variant { output: Output::Any, ..self }
+    }
+
     fn constants(&self) -> [u32; 13] {
         let output = match self.output {
             Output::Accum => 0,
             Output::Rough => 1,
             Output::Cells => 2,
             Output::CellsPixelLights => 3,
+            Output::Any => 4,
         };
         let flags = [
             self.aniso,
@@ -378,18 +399,31 @@ impl LobePass {
         Ok(())
     }
 
-    /// Whether every pipeline of `variants` is built; those that are not are started on threads of
-    /// their own (one per variant), each calling `notify` once its pipeline can be collected.
+    /// Whether every variant of `variants` can be drawn: its own pipeline is built or, for a variant
+    /// whose output depends on the view's size ([`Variant::outputs_vary`]), the one of every output
+    /// ([`Output::Any`]), which stands in until it is. Missing pipelines are started on threads of
+    /// their own (one per variant), each calling `notify` once its pipeline can be collected: the
+    /// stand-in first (what a frame waits for, once for all sizes), then, once it is built, the
+    /// variant's own (what later frames take).
     pub fn ready(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<bool> {
         self.collect(ctx)?;
         let mut ready = true;
+        let mut wanted = Vec::new();
         for v in variants {
             if self.pipelines.contains_key(v) {
                 continue;
             }
-            ready = false;
-            if !self.building.contains_key(v) {
-                let (raw, variant, notify, sender) = (ctx.raw().clone(), *v, notify.clone(), self.built.0.clone());
+            let any = v.any_output();
+            if v.outputs_vary() && self.pipelines.contains_key(&any) {
+                wanted.push(*v);
+            } else {
+                ready = false;
+                wanted.push(if v.outputs_vary() { any } else { *v });
+            }
+        }
+        for v in wanted {
+            if !self.building.contains_key(&v) {
+                let (raw, variant, notify, sender) = (ctx.raw().clone(), v, notify.clone(), self.built.0.clone());
                 // The device outlives the thread: `destroy` joins it before the renderer lets the
                 // device go.
                 let thread = std::thread::Builder::new()
@@ -399,7 +433,7 @@ impl LobePass {
                         let _ = done.sender.send((variant, build(&raw, &variant)));
                     })
                     .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
-                self.building.insert(*v, thread);
+                self.building.insert(v, thread);
             }
         }
         Ok(ready)
@@ -408,12 +442,13 @@ impl LobePass {
     /// Adds one lobe as `job` says into the image.
     pub fn record(&self, rec: &Recording<'_>, variant: Variant, job: &Job<'_>) -> Result<()> {
         let Job { index, samples, seed, material, halton, light_samples, into } = *job;
-        let Some(pipeline) = self.pipelines.get(&variant) else {
-            return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} was not prepared")));
-        };
-        if variant.output != into.output() {
+        if variant.output != Output::Any && variant.output != into.output() {
             return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} does not write {into:?}")));
         }
+        // The variant's own pipeline, or (the editor's, while that one is built) the one of every output.
+        let Some(pipeline) = self.pipelines.get(&variant).or_else(|| self.pipelines.get(&variant.any_output())) else {
+            return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} was not prepared")));
+        };
         let t = rec.targets;
         let env = rec.env()?;
         let keys = env.keys.as_ref().filter(|_| variant.lights);

@@ -129,6 +129,10 @@ pub struct Renderer {
     /// Let frames of up to [`denoise::SPARSE_MAX_SPP`] samples sample the filtered lobes once per
     /// 2 × 2 block of pixels (`denoise::sparse`); false samples every pixel (a test compares).
     pub sparse_filter: bool,
+    /// Draw every lobe pass with the pipeline of every output (`lobe::Output::Any`), the editor's
+    /// stand-in while a view's own pipeline is built; false (the default) with the view's own (a test
+    /// compares the two).
+    pub any_output_lobes: bool,
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
@@ -182,6 +186,7 @@ impl Renderer {
             wide_tiles: true,
             denoise: true,
             sparse_filter: true,
+            any_output_lobes: false,
             stratified_shifts: true,
             seed: 0,
             build_in_background: None,

@@ -272,7 +272,7 @@ impl Renderer {
             })
             .collect();
         for ((_, v), into) in lobes.iter_mut().zip(&intos) {
-            v.output = into.output();
+            v.output = if self.any_output_lobes { lobe::Output::Any } else { into.output() };
         }
         if mesh_view {
             self.buffers_for(offset.saturating_add(settings.spp), settings.spp, settings.estimator)?;
