@@ -96,8 +96,9 @@ layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 
 // The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
 // vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
 // A uniform block (`gpu::LIGHT_SET_UNIFORM_BYTES`, at most 1024 samples or points): every invocation reads the
-// same sample at once, which llvmpipe loads once for all lanes; a storage buffer read inside the
-// sample loop goes lane by lane there.
+// same sample at once. In a loop llvmpipe gathers it lane by lane all the same (a scalar load only
+// where no mask is active: `lp_bld_nir_soa.c` `emit_load_ubo`), but without a branch per lane, which a
+// storage buffer read under a mask takes (`block_points` shares each read among four pixels).
 layout(std140, set = 0, binding = 7) uniform LightSamples { vec4 v[2048]; } light_set;
 // The accumulation image, where a filtered pass (binding 1: `rough`) adds its light term; a sparse
 // pass's `cells_light` (OUTPUT 2) or the accumulation image again (3: the light term per pixel).
@@ -534,10 +535,9 @@ bool sees_lights(Frame f, vec4 shape, vec3 b) {
         sr = 2.0 * t * sqrt(1.0 - t * t);
     }
     bool seen = false;
-    // A loop of constant count, unrolled; the lights past the map's count (copies of its last one)
-    // are skipped by a condition the same for every lane (pass.glsl: such a side costs nothing).
-    for (int k = 0; k < MAX_LIGHTS; k++) {
-        if (uint(k) >= g_lights) continue;
+    // A loop of constant count, unrolled; the lights past the map's count are copies of its last one
+    // (`environment::cone_table`), which OR in the same answer.
+    [[unroll]] for (int k = 0; k < MAX_LIGHTS; k++) {
         // Within the cone's half-angle plus the reach: cos(apart) ≥ cos(ε + reach), always past π.
         float ce = clamp(g_cone[k].w, -1.0, 1.0), se = sqrt(1.0 - ce * ce);
         bool near = !(ce + cr > 0.0) || !(dot(r, g_cone[k].xyz) < ce * cr - se * sr);
@@ -551,7 +551,7 @@ bool sees_lights(Frame f, vec4 shape, vec3 b) {
 // light term of the four pixels of block c, each with its own reach test, in one loop over the points
 // that reads each point once for the four. In a loop llvmpipe reads a buffer lane by lane, even at an
 // index the same for every lane (`lp_bld_nir_soa.c` `emit_load_ubo`: a scalar load only where no
-// mask is active, and a loop is one): the two vec4 of a point are 64 scalar loads for a vector of 8,
+// mask is active, and a loop is one): the point's six floats are 48 scalar loads for a vector of 8,
 // about as much as the point's arithmetic. Session 23, 512², the bench's goal scene: its α 0.02 lobe
 // (212 points, 4 pixels a block) against a loop per pixel, see README. The same sums in the same
 // order: the same image.
@@ -563,7 +563,9 @@ void block_points(ivec2 c, GpuLobe l, vec4 q) {
         ivec2 px = 2 * c + ivec2(k & 1, k >> 1);
         Frame f;
         vec3 wo;
-        bool in_reach = inside(px) && shaded(px, imageLoad(gnrm, px), f, wo);
+        // Set for a pixel past the image's edge too (its G-buffer texel clamped; it takes nothing).
+        bool facing_eye = shaded(px, imageLoad(gnrm, min(px, ivec2(pc.size.xy) - 1)), f, wo);
+        bool in_reach = inside(px) && facing_eye;
         vec3 b = ROTATED ? quat_rotate(q, wo) : wo;
         take[k] = in_reach && (!REACH_TEST || sees_lights(f, l.shape, b));
         v1[k] = point_view(f, b, l.shape, wo.z);

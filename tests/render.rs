@@ -1211,6 +1211,12 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
     let bench = Material::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench-4lobes.brdf.json")).unwrap();
     let mut split = bench.clone();
     split.lobes = vec![Lobe { split: true, rotation: DQuat::from_rotation_y(0.35), ..Lobe::isotropic([0.3; 3], 0.18) }];
+    // The outputs the cases take (`render::denoise`'s thresholds; asserted so that the test notices
+    // when a threshold moves them): the α 0.02 lobe at 512² and the split lobe at 128² take their
+    // light term at each pixel, and at 48² (dense) all but the α 0.2 lobe stay unfiltered.
+    use brdf_shop::render::denoise;
+    assert!(denoise::pixel_lights(&bench.lobes[0], 512, 512) && denoise::pixel_lights(&split.lobes[0], 128, 128));
+    assert!(!denoise::sparse(8, 48, 48) && denoise::min_alpha(false, 48, 48) > 0.1);
     let mut failures = Vec::new();
     for (name, m, size, filter) in [
         ("bench", &bench, 512, "denoise[sparse]"),
@@ -1225,6 +1231,10 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
         r.any_output_lobes = false;
         let names: Vec<&str> = own.timings.iter().map(|t| t.name.as_str()).collect();
         assert!(names.contains(&filter), "{name} at {size}²: {names:?}");
+        // The lobes with their light term at each pixel see the lights as points (`block_points`).
+        if size != 48 {
+            assert!(names.iter().any(|n| n.starts_with("lobe0[") && n.contains("points")), "{name}: {names:?}");
+        }
         assert_finite(name, &own.image);
         if own.image.pixels != any.image.pixels {
             let d = reference::relative_l1(&any.image, &own.image).unwrap_or(f64::NAN);

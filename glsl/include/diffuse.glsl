@@ -22,7 +22,7 @@ vec3 irradiance(vec3 c[9], vec3 n) {
 struct DiffuseLight { vec3 c[9]; vec4 dir[4]; vec4 power[4]; };
 #define READ_DIFFUSE_LIGHT(out_d, sh_buffer, lights_buffer, with_lights)                               \
     {                                                                                                  \
-        for (int k = 0; k < 9; k++) out_d.c[k] = sh_buffer.c[k].rgb;                                   \
+        [[unroll]] for (int k = 0; k < 9; k++) out_d.c[k] = sh_buffer.c[k].rgb;                        \
         uint n_ = with_lights ? min(lights_buffer.count.x, 4u) : 0u;                                    \
         [[unroll]] for (uint k = 0u; k < 4u; k++) {                                                    \
             out_d.dir[k] = with_lights ? lights_buffer.v[2u * k] : vec4(0.0);                           \

@@ -8,8 +8,9 @@
 
 #ifdef MATERIAL_UNIFORM
 // As a uniform buffer (the including shader defines MATERIAL_UNIFORM): llvmpipe reads a uniform
-// buffer at an index that is the same for every invocation with one scalar load, also under control
-// flow, where a storage buffer read becomes a loop over the lanes. The buffer is padded to the whole
+// buffer at an index that is the same for every invocation with one scalar load where no mask is
+// active, and under control flow with a gather over the lanes (`lp_bld_nir_soa.c` `emit_load_ubo`),
+// where a storage buffer read under a mask becomes a loop over the lanes with a branch each. The buffer is padded to the whole
 // block (`gpu::MATERIAL_UNIFORM_BYTES`: MAX_LOBES lobes).
 layout(std140, set = 0, binding = MATERIAL_BINDING) uniform MaterialBuf {
     vec4 diffuse;

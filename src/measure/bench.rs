@@ -412,6 +412,7 @@ pub fn json(rows: &[Measurement], device: &str, plan: &Plan, peak_gflops: f64) -
     serde_json::json!({
         "device": device,
         "repeats": plan.repeats,
+        "goal_repeats": plan.goal_repeats,
         "peak_gflops": peak_gflops,
         "flops_per_sample": FLOPS_PER_SAMPLE,
         "goal_ms": GOAL_MS,

@@ -444,11 +444,13 @@ impl GpuKeyLights {
     }
 }
 
-/// The `Lights` buffer of `keylight.comp` (see [`GpuKeyLights::cones`]): the count, then
-/// `keylight::MAX_LIGHTS` lights (at least), the last repeated past the count, so that the shaders
+/// The `Lights` buffer of `lobe.comp`, `compact.comp` and `diffuse.comp` (see
+/// [`GpuKeyLights::cones`]) for one light or more: the count, then `keylight::MAX_LIGHTS` lights (at
+/// least), the last repeated past the count, so that the shaders
 /// read them at constant indices (`lobe.comp`, `diffuse.glsl`; the lights past the count add no
 /// power there and repeat a cone the reach test already has).
 pub fn cone_table(lights: &[crate::scene::keylight::KeyLight]) -> Vec<f32> {
+    debug_assert!(!lights.is_empty(), "a cone table without a light to repeat");
     let mut out: Vec<f32> = vec![f32::from_bits(lights.len() as u32), 0.0, 0.0, 0.0];
     let padding = crate::scene::keylight::MAX_LIGHTS.saturating_sub(lights.len());
     for l in lights.iter().chain(std::iter::repeat_n(lights.last(), padding).flatten()) {

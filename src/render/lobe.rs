@@ -509,8 +509,8 @@ impl LobePass {
         let samples = if cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
         push.params = [index, samples, seed, m];
         // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
-        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel (only 1 against 2 is
-        // read: the rest is the pipeline's `Output`).
+        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel (a pipeline of one
+        // `Output` reads only 1 against 2; `Output::Any` reads them all).
         let mode = match into {
             Into::Accum => 0.0,
             Into::Rough { strata: true } => 1.0,

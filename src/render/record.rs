@@ -272,6 +272,8 @@ impl Renderer {
             })
             .collect();
         for ((_, v), into) in lobes.iter_mut().zip(&intos) {
+            // The editor's stand-in (`LobePass::ready`) covers every lobe that may leave `Accum`.
+            debug_assert!(*into == lobe::Into::Accum || v.outputs_vary(), "{v:?} writes {into:?}");
             v.output = if self.any_output_lobes { lobe::Output::Any } else { into.output() };
         }
         if mesh_view {
