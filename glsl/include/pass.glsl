@@ -28,7 +28,7 @@ layout(push_constant) uniform Push {
     uvec4 size;    // image W, H; environment W, H
     uvec4 params;  // lobe index, samples per lobe N, first sample of this dispatch, total samples
     vec4 fparams;  // diffuse rgb (diffuse) | 1/(total samples) (mis) | lod bias, filter mode, light counts (lobe) | 1/σ² (denoise)
-    vec4 light;    // canvas light direction, intensity
+    vec4 light;    // canvas light direction, intensity | each light's end in the light set (lobe, tiles)
 } pc;
 
 // The primary ray through the centre of pixel p (SPEC §1 mesh camera).

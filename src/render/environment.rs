@@ -80,8 +80,20 @@ fn point_set(ctx: &Context, rows: &[[f32; 8]], name: &str) -> Result<Buffer> {
     Buffer::upload(ctx, &gpu::light_set_bytes(rows), vk::BufferUsageFlags::UNIFORM_BUFFER, name)
 }
 
-/// A lobe's tiles: the rows of `keylight::tiles::tile_points`, or `None` where they do not fit.
-type Tiles = Option<Vec<[f32; 8]>>;
+/// A lobe's tiles (`keylight::tiles::tile_points`), or `None` where they do not fit.
+type Tiles = Option<keylight::tiles::TileSet>;
+
+/// Which lights a lobe's tiles are made of ([`GpuKeyLights::tiles`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TileLights {
+    /// The key lights.
+    Key,
+    /// The key and wide lights together (`GpuWideLights::all`).
+    KeyAndWide,
+    /// The key lights' tiles, then each wide light as its own four points
+    /// (`lobe::sees_wide_lights_as_points`).
+    KeyAndWidePoints,
+}
 
 /// How many lobes' tiles a map keeps (`GpuKeyLights::tiles`; all are dropped when it is full).
 const TILES_KEPT: usize = 1024;
@@ -110,7 +122,7 @@ pub struct GpuKeyLights {
     /// The tiles made so far (`keylight::tiles`), by lobe roughness, point allowance and whether
     /// they cut the wide lights too: a frame asks for them per lobe, and an edit changes one lobe
     /// at a time.
-    tiles: RefCell<HashMap<(u64, usize, bool), Tiles>>,
+    tiles: RefCell<HashMap<(u64, usize, TileLights), Tiles>>,
 }
 
 /// The wide lights on the GPU: the residual map without them (and without the key lights), and
@@ -195,9 +207,18 @@ impl KeyLightSummary {
                 "threshold_over_mean": crate::scene::keylight::WIDE_THRESHOLD_OVER_MEAN,
                 "share": self.wide_share,
                 "quadrature_min_alpha": self.wide_min_alpha(),
+                "points_min_alpha_max": self.wide_points_min_alpha(),
                 "lights": self.wide.iter().map(light_json).collect::<Vec<_>>(),
             },
         })
+    }
+
+    /// The smallest `max(αx, αy)` of a lobe the filter does not take that sees each wide light as its
+    /// four points where it does not see them as tiles (`lobe::sees_wide_lights_as_points`); `None`
+    /// without wide lights.
+    pub fn wide_points_min_alpha(&self) -> Option<f64> {
+        let spread = self.wide.iter().map(|l| l.spread).fold(0.0, f64::max);
+        (!self.wide.is_empty()).then(|| spread / super::lobe::WIDE_POINTS_RATIO)
     }
 
     /// The smallest `min(αx, αy)` of a lobe that sees the key and wide lights as points (`None`
@@ -253,11 +274,12 @@ impl KeyLightSummary {
         if let Some(alpha) = self.wide_min_alpha() {
             let each: Vec<String> = self.wide.iter().map(describe_light).collect();
             line += &format!(
-                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe sees the key and wide lights as tiles together where those fit (and its reach test, if it takes one, can hold them all), over the map without both",
+                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe sees the key and wide lights as tiles together where those fit (and its reach test, if it takes one, can hold them all), over the map without both; otherwise a lobe the filter does not take with max(αx, αy) ≥ {:.4} sees each wide light as its 4 quadrature points (and the key lights as points or tiles), over the map without both",
                 self.wide.len(),
                 self.wide_share * 100.0,
                 each.join("; "),
-                super::lobe::WIDE_TILES_MIN_SPP
+                super::lobe::WIDE_TILES_MIN_SPP,
+                self.wide_points_min_alpha().unwrap_or(0.0)
             );
         }
         line
@@ -354,20 +376,23 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 }
 
 impl GpuKeyLights {
-    /// The rows of `keylight::tiles::tile_points` for a lobe of smaller roughness `alpha` and at most
-    /// `max_points` points, of the key lights or, with `wide`, of the key and wide lights together
-    /// (`None` on a map without wide lights), made once per map (at most `TILES_KEPT` kept).
-    pub fn tiles(&self, alpha: f64, max_points: usize, wide: bool) -> Tiles {
-        let lights = match (wide, &self.wide) {
-            (false, _) => &self.lights,
-            (true, Some(w)) => &w.all,
-            (true, None) => return None,
-        };
-        let key = (alpha.to_bits(), max_points, wide);
+    /// The tiles (`keylight::tiles::tile_points`) for a lobe of smaller roughness `alpha` and at most
+    /// `max_points` points, of the lights `which` says (`None` for the wide lights on a map without
+    /// any), made once per map (at most `TILES_KEPT` kept).
+    pub fn tiles(&self, alpha: f64, max_points: usize, which: TileLights) -> Tiles {
+        let key = (alpha.to_bits(), max_points, which);
         if let Some(made) = self.tiles.borrow().get(&key) {
             return made.clone();
         }
-        let made = keylight::tiles::tile_points(lights, alpha, max_points);
+        let made = match (which, &self.wide) {
+            (TileLights::Key, _) => keylight::tiles::tile_points(&self.lights, alpha, max_points),
+            (TileLights::KeyAndWide, Some(w)) => keylight::tiles::tile_points(&w.all, alpha, max_points),
+            (TileLights::KeyAndWidePoints, Some(w)) => {
+                let left = max_points.checked_sub(4 * w.lights.len())?;
+                keylight::tiles::tile_points(&self.lights, alpha, left).map(|t| t.and_points(&w.lights))
+            }
+            (_, None) => return None,
+        };
         let mut kept = self.tiles.borrow_mut();
         if kept.len() >= TILES_KEPT {
             kept.clear();

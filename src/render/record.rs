@@ -4,7 +4,7 @@
 
 use ash::vk;
 
-use super::environment::GpuEnvironment;
+use super::environment::{GpuEnvironment, GpuWideLights, TileLights};
 use super::gpu::{self, Push};
 use super::targets::Targets;
 use super::{
@@ -13,7 +13,8 @@ use super::{
 };
 use crate::brdf::Material;
 use crate::error::{Error, Result};
-use crate::scene::keylight::tiles::max_points;
+use crate::scene::keylight::tiles::{max_points, tile_alpha, TileSet};
+use crate::scene::keylight::MAX_LIGHTS;
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
 use crate::vk::pipeline::Pipeline;
@@ -200,8 +201,12 @@ impl Renderer {
         let key = settings.estimator == Estimator::Key;
         let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
         let lights = key_lights.is_some();
+        // Where each lobe pass writes: the rough lobes the filter takes (`denoise::fits`), sampled
+        // once a 2 × 2 block in sparse frames.
+        let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
+        let floor = denoise::min_alpha(sparse, w, h);
         // A lobe too narrow for the lights' own points sees them as tiles where those fit.
-        let mut tiles: Vec<(u32, Vec<[f32; 8]>)> = Vec::new();
+        let mut tiles: Vec<(u32, TileSet)> = Vec::new();
         let mut lobes: Vec<(u32, lobe::Variant)> = material
             .lobes
             .iter()
@@ -222,25 +227,45 @@ impl Renderer {
                 let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
                 let mut tiled = false;
                 if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
-                    let alpha = l.alpha_x.min(l.alpha_y);
+                    let alpha = tile_alpha(l.alpha_x, l.alpha_y);
                     // The key and wide lights together first (also for a lobe that sees the key
                     // lights as points: those are then their own one tile), where the reach test
                     // (if it pays) sees them all; their tiles take the wide lights off the residual.
                     let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
-                    if let Some(w) = wide_lights.filter(|w| wide_tiles && (!pays || w.cones.is_some())) {
-                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), true) {
+                    let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
+                    if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
+                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
+                            tiles.push((i as u32, rows));
+                            (tiled, wide) = (true, true);
+                        }
+                    }
+                    // Otherwise a lobe whose samples' noise stays in the image (the filter does not
+                    // take it) and wide enough sees the wide lights as their own points.
+                    let filtered = self.denoise && key && denoise::fits(l, false, floor);
+                    let wide_points = |w: &&GpuWideLights| {
+                        self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, filtered)
+                    };
+                    if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
+                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWidePoints) {
                             tiles.push((i as u32, rows));
                             (tiled, wide) = (true, true);
                         }
                     }
                     if !tiled && !whole {
-                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), false) {
+                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
                             tiles.push((i as u32, rows));
                             tiled = true;
                         }
                     }
                 }
                 let points = whole || tiled;
+                let tests_reach = reach_test && (!points || tiled);
+                // The lights of the cone table the test reads (`LobePass::record`).
+                let light_slots = match key_lights.filter(|_| tests_reach) {
+                    Some(k) if wide => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
+                    Some(k) => k.lights.len(),
+                    None => MAX_LIGHTS,
+                };
                 (
                     i as u32,
                     lobe::Variant {
@@ -249,16 +274,14 @@ impl Renderer {
                         lights,
                         points,
                         wide,
-                        reach: reach_test && (!points || tiled),
+                        reach: tests_reach,
+                        light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
                         ..lobe::Variant::of(material, l, prefilter)
                     },
                 )
             })
             .collect();
-        // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`): the rough
-        // lobes the filter takes (`denoise::fits`), sampled once a 2 × 2 block in sparse frames.
-        let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
-        let floor = denoise::min_alpha(sparse, w, h);
+        // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
             .iter()
             .map(|(i, v)| {
@@ -316,14 +339,14 @@ impl Renderer {
             light_counts = Some((samples.len() as u32, [m as f32, keys.sampling.dark_samples(m) as f32]));
         }
         if mesh_view && !tiles.is_empty() {
-            let bytes: Vec<u8> = tiles.iter().flat_map(|(_, rows)| gpu::light_set_bytes(rows)).collect();
+            let bytes: Vec<u8> = tiles.iter().flat_map(|(_, t)| gpu::light_set_bytes(&t.rows)).collect();
             ring.current().upload(ctx, "keylights.tiles", &bytes)?;
         }
         let frame = ring.current();
         let (cmd, pool) = (frame.cmd, frame.pool);
         let (ts, buffers) = frame.parts();
         let material_buf = buffers.get("material").expect("written by begin_frame");
-        let set = |buffer, offset, count, counts| lobe::LightSet { buffer, offset, count, counts };
+        let set = |buffer, offset, count, counts| lobe::LightSet { buffer, offset, count, counts, ends: None };
         let light_samples =
             light_counts.map(|(n, c)| set(buffers.get("keylights.frame").expect("written above"), 0, n, c));
         let key_lights = self.env.as_ref().and_then(|e| e.keys.as_ref()).filter(|_| key);
@@ -332,7 +355,12 @@ impl Renderer {
         let tile_set = |lobe: u32| {
             let at = tiles.iter().position(|t| t.0 == lobe)?;
             let buffer = buffers.get("keylights.tiles").expect("written above");
-            Some(set(buffer, (at * gpu::LIGHT_SET_UNIFORM_BYTES) as u64, tiles[at].1.len() as u32, [0.0; 2]))
+            let t = &tiles[at].1;
+            let ends = lobe::LightSet::light_ends(&t.ends);
+            Some(lobe::LightSet {
+                ends,
+                ..set(buffer, (at * gpu::LIGHT_SET_UNIFORM_BYTES) as u64, t.rows.len() as u32, [0.0; 2])
+            })
         };
         let passes = self.passes.as_ref().expect("passes live until drop");
         // Culling is exact only for an eye outside the mesh's bounding sphere (radius 1) by more than
@@ -430,7 +458,7 @@ impl Renderer {
                 }
                 for (&(i, v), &into) in lobes.iter().zip(&intos) {
                     let name = match tiles.iter().find(|t| t.0 == i) {
-                        Some((_, rows)) => format!("lobe{i}[{},tiles {}]", v.tag(), rows.len()),
+                        Some((_, t)) => format!("lobe{i}[{},tiles {}]", v.tag(), t.rows.len()),
                         None => format!("lobe{i}[{}]", v.tag()),
                     };
                     ts.time(ctx, cmd, &name, || {

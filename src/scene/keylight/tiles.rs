@@ -25,6 +25,24 @@ use glam::DVec3;
 
 use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 
+/// The roughness an anisotropic lobe's tiles are made for ([`tile_points`]' `alpha`): its `α` where
+/// it is round; otherwise the `α` of the round lobe whose tiles' error matches its own averaged over
+/// its orientation to the light. The four points of a region of spread `s` err by a fourth-order
+/// term in the lobe's exponent `x²/αx² + y²/αy²` over the region (its fourth directional
+/// derivatives), which a round region at angle `φ` to the lobe's axes weighs by
+/// `(cos²φ/αx² + sin²φ/αy²)²`; over `φ` its mean is `(3/αx⁴ + 2/(αx² αy²) + 3/αy⁴) / 8` (`E cos⁴ =
+/// E sin⁴ = 3/8`, `E cos² sin² = 1/8`), `1/α⁴` for a round lobe. Along the narrow axis the weight is
+/// `1/αx⁴`, at most 8/3 of the mean, so the tiles' bound ([`TILE_BUDGET`]) holds on average over the
+/// orientations and within 8/3 of it at the worst (`tests/keylight.rs`: at most 3.8 % of the largest
+/// value over eight orientations of three lobes on four maps, against 22 % for tiles at the geometric
+/// mean `√(αx αy)`, which ignores the narrow axis). The lobe's smaller `α` instead, the bound at every
+/// orientation, takes 44 points for studio's lamp where this takes 28 (the sweep's Ward 0.05 × 0.3
+/// lobe; session 24).
+pub fn tile_alpha(alpha_x: f64, alpha_y: f64) -> f64 {
+    let (a2, b2) = (alpha_x * alpha_x, alpha_y * alpha_y);
+    (8.0 / (3.0 / (a2 * a2) + 2.0 / (a2 * b2) + 3.0 / (b2 * b2))).powf(0.25)
+}
+
 /// The most points a lobe's tiles may take where every shaded pixel evaluates them all (no reach
 /// test, see [`max_points`]): a point costs about a seventh of a BRDF sample on lavapipe (512²,
 /// studio: an anisotropic lobe's 132 points took its pass from 28 to 59–79 ms, a 44-point lobe's
@@ -205,26 +223,50 @@ fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Til
     }
 }
 
+/// A lobe's light set of tiles ([`tile_points`]): the rows, light after light, and where each
+/// light's rows end, for the lobe pass that runs a light's points only at the pixels within its
+/// reach (`lobe.comp` `REACH_TEST`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TileSet {
+    /// `[direction, 0, power / 4, 0]`, four a tile.
+    pub rows: Vec<[f32; 8]>,
+    /// The end of light `k`'s rows in `rows`, one per light, the last `rows.len()`.
+    pub ends: Vec<usize>,
+}
+
+impl TileSet {
+    /// These tiles followed by each of `lights` as its own four points ([`super::point_table`]).
+    pub fn and_points(mut self, lights: &[KeyLight]) -> TileSet {
+        for light in lights {
+            self.rows.extend(super::point_table(std::slice::from_ref(light)));
+            self.ends.push(self.rows.len());
+        }
+        self
+    }
+}
+
 /// The `[direction, 0, power / 4, 0]` rows of every light's tiles' points for a lobe of smaller
 /// roughness `alpha`, at most `max_points` in all; `None` when the lobe is too narrow for that many.
 /// Where every light fits whole ([`super::quadrature_fits`]) these are
 /// [`super::point_table`]'s rows.
-pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option<Vec<[f32; 8]>> {
+pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option<TileSet> {
     if !(alpha > 0.0) {
         return None;
     }
     if super::quadrature_fits(lights, alpha, alpha) {
-        return Some(super::point_table(lights));
+        return Some(TileSet { rows: super::point_table(lights), ends: (1..=lights.len()).map(|k| 4 * k).collect() });
     }
     let mut rows = Vec::new();
+    let mut ends = Vec::with_capacity(lights.len());
     for light in lights {
         let left = (max_points / 4).checked_sub(rows.len() / 4)?;
         for t in light_tiles(light, alpha, left)? {
             let p = t.power.map(|c| (c / 4.0) as f32);
             rows.extend(t.points.map(|d| [d.x as f32, d.y as f32, d.z as f32, 0.0, p[0], p[1], p[2], 0.0]));
         }
+        ends.push(rows.len());
     }
-    Some(rows)
+    Some(TileSet { rows, ends })
 }
 
 /// The smallest `alpha` (to 1 %) whose tiles fit in `max_points(alpha)` points, or `None` when no
