@@ -444,6 +444,36 @@ impl LobePass {
         Ok(())
     }
 
+    /// Starts building `variants` in the background (those not built or being built) without
+    /// waiting for them: the editor's variants of a view size it will draw next.
+    pub fn build_ahead(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<()> {
+        self.collect(ctx)?;
+        for v in variants {
+            if !self.pipelines.contains_key(v) {
+                self.spawn(ctx, *v, notify)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Builds `v` on a thread of its own unless one already is.
+    fn spawn(&mut self, ctx: &Context, v: Variant, notify: &Notify) -> Result<()> {
+        if self.building.contains_key(&v) {
+            return Ok(());
+        }
+        let (raw, variant, notify, sender) = (ctx.raw().clone(), v, notify.clone(), self.built.0.clone());
+        // The device outlives the thread: `destroy` joins it before the renderer lets the device go.
+        let thread = std::thread::Builder::new()
+            .name("lobe pipeline".into())
+            .spawn(move || {
+                let done = Done { variant, sender, notify };
+                let _ = done.sender.send((variant, build(&raw, &variant)));
+            })
+            .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
+        self.building.insert(v, thread);
+        Ok(())
+    }
+
     /// Whether every variant of `variants` can be drawn: its own pipeline is built or, for a variant
     /// whose output depends on the view's size ([`Variant::outputs_vary`]), the one of every output
     /// ([`Output::Any`]), which stands in until it is. Missing pipelines are started on threads of
@@ -467,19 +497,7 @@ impl LobePass {
             }
         }
         for v in wanted {
-            if !self.building.contains_key(&v) {
-                let (raw, variant, notify, sender) = (ctx.raw().clone(), v, notify.clone(), self.built.0.clone());
-                // The device outlives the thread: `destroy` joins it before the renderer lets the
-                // device go.
-                let thread = std::thread::Builder::new()
-                    .name("lobe pipeline".into())
-                    .spawn(move || {
-                        let done = Done { variant, sender, notify };
-                        let _ = done.sender.send((variant, build(&raw, &variant)));
-                    })
-                    .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
-                self.building.insert(v, thread);
-            }
+            self.spawn(ctx, v, notify)?;
         }
         Ok(ready)
     }

@@ -205,70 +205,72 @@ impl Renderer {
         // once a 2 × 2 block in sparse frames.
         let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
         let floor = denoise::min_alpha(sparse, w, h);
-        // A lobe too narrow for the lights' own points sees them as tiles where those fit.
-        let mut tiles: Vec<(u32, TileSet)> = Vec::new();
-        let mut lobes: Vec<(u32, lobe::Variant)> = material
-            .lobes
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
-            .map(|(i, l)| {
-                let fits = |lights: &[crate::scene::keylight::KeyLight]| {
-                    crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
-                };
-                let whole = key_lights.is_some_and(|k| fits(&k.lights));
-                // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
-                // tiles with the test off give the same image (a test compares).
-                let pays = lights && lobe::reach_test_pays(material, l);
-                let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
-                let reach_test = self.light_reach_test && pays;
-                let wide_lights = key_lights.and_then(|k| k.wide.as_ref()).filter(|_| self.wide_lights);
-                // A lobe that sees the wide lights as points too takes them off its residual.
-                let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
-                let mut tiled = false;
-                if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
-                    let alpha = tile_alpha(l.alpha_x, l.alpha_y);
-                    // The key and wide lights together first (also for a lobe that sees the key
-                    // lights as points: those are then their own one tile), where the reach test
-                    // (if it pays) sees them all; their tiles take the wide lights off the residual.
-                    let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
-                    let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
-                    if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
-                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
-                            tiles.push((i as u32, rows));
-                            (tiled, wide) = (true, true);
-                        }
-                    }
-                    // Otherwise a lobe whose samples' noise stays in the image (the filter does not
-                    // take it) and wide enough sees the wide lights as their own points.
-                    let filtered = self.denoise && key && denoise::fits(l, false, floor);
-                    let wide_points = |w: &&GpuWideLights| {
-                        self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, filtered)
+        // A lobe too narrow for the lights' own points sees them as tiles where those fit. `flip`:
+        // the variants the lobes would take if the filter's choice (which depends on the view's size)
+        // went the other way, for the editor to build ahead (below).
+        let choose = |flip: bool| -> Vec<(u32, lobe::Variant, Option<TileSet>)> {
+            material
+                .lobes
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
+                .map(|(i, l)| {
+                    let mut tile_set = None;
+                    let fits = |lights: &[crate::scene::keylight::KeyLight]| {
+                        crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
                     };
-                    if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
-                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWidePoints) {
-                            tiles.push((i as u32, rows));
-                            (tiled, wide) = (true, true);
+                    let whole = key_lights.is_some_and(|k| fits(&k.lights));
+                    // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
+                    // tiles with the test off give the same image (a test compares).
+                    let pays = lights && lobe::reach_test_pays(material, l);
+                    let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
+                    let reach_test = self.light_reach_test && pays;
+                    let wide_lights = key_lights.and_then(|k| k.wide.as_ref()).filter(|_| self.wide_lights);
+                    // A lobe that sees the wide lights as points too takes them off its residual.
+                    let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
+                    let mut tiled = false;
+                    if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
+                        let alpha = tile_alpha(l.alpha_x, l.alpha_y);
+                        // The key and wide lights together first (also for a lobe that sees the key
+                        // lights as points: those are then their own one tile), where the reach test
+                        // (if it pays) sees them all; their tiles take the wide lights off the residual.
+                        let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
+                        let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
+                        if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
+                            if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
+                                tile_set = Some(rows);
+                                (tiled, wide) = (true, true);
+                            }
+                        }
+                        // Otherwise a lobe whose samples' noise stays in the image (the filter does not
+                        // take it) and wide enough sees the wide lights as their own points.
+                        let filtered = (self.denoise && key && denoise::fits(l, false, floor)) != flip;
+                        let wide_points = |w: &&GpuWideLights| {
+                            self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, filtered)
+                        };
+                        if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
+                            if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWidePoints)
+                            {
+                                tile_set = Some(rows);
+                                (tiled, wide) = (true, true);
+                            }
+                        }
+                        if !tiled && !whole {
+                            if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
+                                tile_set = Some(rows);
+                                tiled = true;
+                            }
                         }
                     }
-                    if !tiled && !whole {
-                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
-                            tiles.push((i as u32, rows));
-                            tiled = true;
-                        }
-                    }
-                }
-                let points = whole || tiled;
-                let tests_reach = reach_test && (!points || tiled);
-                // The lights of the cone table the test reads (`LobePass::record`).
-                let light_slots = match key_lights.filter(|_| tests_reach) {
-                    Some(k) if wide => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
-                    Some(k) => k.lights.len(),
-                    None => MAX_LIGHTS,
-                };
-                (
-                    i as u32,
-                    lobe::Variant {
+                    let points = whole || tiled;
+                    let tests_reach = reach_test && (!points || tiled);
+                    // The lights of the cone table the test reads (`LobePass::record`).
+                    let light_slots = match key_lights.filter(|_| tests_reach) {
+                        Some(k) if wide => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
+                        Some(k) => k.lights.len(),
+                        None => MAX_LIGHTS,
+                    };
+                    let variant = lobe::Variant {
                         vec4: !self.scalar_lobes,
                         key,
                         lights,
@@ -277,10 +279,26 @@ impl Renderer {
                         reach: tests_reach,
                         light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
                         ..lobe::Variant::of(material, l, prefilter)
-                    },
-                )
-            })
-            .collect();
+                    };
+                    (i as u32, variant, tile_set)
+                })
+                .collect()
+        };
+        let chosen = choose(false);
+        let tiles: Vec<(u32, TileSet)> = chosen.iter().filter_map(|(i, _, t)| Some((*i, t.clone()?))).collect();
+        let mut lobes: Vec<(u32, lobe::Variant)> = chosen.into_iter().map(|(i, v, _)| (i, v)).collect();
+        // The editor builds ahead the variants of the filter's other choice, which a lobe's view of
+        // the wide lights follows (`lobe::sees_wide_lights_as_points`): its previews and its settle
+        // frame are drawn at different sizes, and a settle frame must not wait for a pipeline.
+        // Their stand-ins (`Output::Any`, what `LobePass::ready` lets a frame draw with).
+        let ahead: Vec<lobe::Variant> = match &self.build_in_background {
+            Some(_) => choose(true)
+                .into_iter()
+                .map(|(_, v, _)| v.any_output())
+                .filter(|v| v.outputs_vary() && lobes.iter().all(|(_, w)| w.any_output() != *v))
+                .collect(),
+            None => Vec::new(),
+        };
         // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
             .iter()
@@ -306,6 +324,7 @@ impl Renderer {
                 let lobe = &mut self.passes.as_mut().expect("passes live until drop").lobe;
                 match &self.build_in_background {
                     Some(notify) => {
+                        lobe.build_ahead(&self.ctx, &ahead, notify)?;
                         if !lobe.ready(&self.ctx, &variants, notify)? {
                             // The view keeps showing what it showed: back to the targets it had.
                             if switched {
