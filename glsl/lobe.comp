@@ -30,7 +30,7 @@
 // REACH_TEST (LIGHTS, a narrow lobe of one component, `lobe::Variant::reach`): a pixel whose lobe
 // cannot reach any light (`sees_lights`) skips the light term: no light samples, and its BRDF samples
 // do not look for the lights. With POINTS (tiles) each light's points run only at the pixels within
-// that light's reach (`light_points`): light k's rows of light_set end at pc.light[k].
+// that light's reach (`near_points`, `block_points`): light k's rows of light_set end at pc.light[k].
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
 // FILTERED (OUTPUT 1; fparams.y 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the
@@ -651,9 +651,9 @@ void main() {
     GpuLobe l = MAT.lobes[pc.params.x];
     if (LIGHTS) {
         g_lights = min(lights.count.x, uint(MAX_LIGHTS));
-        // The table holds MAX_LIGHTS lights, the last repeated past the count (`cone_table`; the cone
-        // test ORs all four): constant indices, which llvmpipe loads once for every lane, where an
-        // index computed from the count went lane by lane.
+        // The table holds MAX_LIGHTS lights, the last repeated past the count (`cone_table`; the reach
+        // test takes the first LIGHT_SLOTS): constant indices, which llvmpipe loads once for every
+        // lane, where an index computed from the count went lane by lane.
         [[unroll]] for (uint k = 0u; k < uint(MAX_LIGHTS); k++) {
             g_cone[k] = lights.v[2u * k];
             g_extent[k] = lights.v[2u * k + 1u].w;

@@ -376,7 +376,7 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 }
 
 impl GpuKeyLights {
-    /// The tiles (`keylight::tiles::tile_points`) for a lobe of smaller roughness `alpha` and at most
+    /// The tiles (`keylight::tiles::tile_points`) for a lobe of roughness `alpha` (`tiles::tile_alpha`) and at most
     /// `max_points` points, of the lights `which` says (`None` for the wide lights on a map without
     /// any), made once per map (at most `TILES_KEPT` kept).
     pub fn tiles(&self, alpha: f64, max_points: usize, which: TileLights) -> Tiles {

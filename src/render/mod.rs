@@ -116,8 +116,9 @@ pub struct Renderer {
     /// Let the `key` lobe passes that see the key lights as points or tiles but the wide lights not
     /// as points take the key and wide lights as tiles together, where those fit, and sample the
     /// residual without both, in frames of at least [`lobe::WIDE_TILES_MIN_SPP`] samples (with
-    /// `wide_lights` and `light_tiles` set), and in fewer the lobes that
-    /// [`lobe::sees_wide_lights_as_points`] admits take the wide lights as their own points; false
+    /// `wide_lights` and `light_tiles` set), and otherwise (fewer samples, or tiles that do not fit)
+    /// the lobes that [`lobe::sees_wide_lights_as_points`] admits take the wide lights as their own
+    /// points; false
     /// keeps the wide lights in their residual (a test compares the two).
     pub wide_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);

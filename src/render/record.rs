@@ -292,12 +292,12 @@ impl Renderer {
         // frame are drawn at different sizes, and a settle frame must not wait for a pipeline.
         // Their stand-ins (`Output::Any`, what `LobePass::ready` lets a frame draw with).
         let ahead: Vec<lobe::Variant> = match &self.build_in_background {
-            Some(_) => choose(true)
+            Some(_) if mesh_view => choose(true)
                 .into_iter()
                 .map(|(_, v, _)| v.any_output())
                 .filter(|v| v.outputs_vary() && lobes.iter().all(|(_, w)| w.any_output() != *v))
                 .collect(),
-            None => Vec::new(),
+            _ => Vec::new(),
         };
         // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
@@ -324,7 +324,6 @@ impl Renderer {
                 let lobe = &mut self.passes.as_mut().expect("passes live until drop").lobe;
                 match &self.build_in_background {
                     Some(notify) => {
-                        lobe.build_ahead(&self.ctx, &ahead, notify)?;
                         if !lobe.ready(&self.ctx, &variants, notify)? {
                             // The view keeps showing what it showed: back to the targets it had.
                             if switched {
@@ -342,6 +341,8 @@ impl Renderer {
                             }
                             return Ok(Recorded::Waiting);
                         }
+                        // After the frame's own, so that those build first.
+                        lobe.build_ahead(&self.ctx, &ahead, notify)?;
                     }
                     None => lobe.prepare(&self.ctx, &variants)?,
                 }

@@ -195,7 +195,7 @@ fn split(region: &mut Vec<LightTexel>, t: &Tile, e1: DVec3, e2: DVec3) -> Option
     Some((tile(region, a), tile(region, b)))
 }
 
-/// The tiles of `light` for a lobe of smaller roughness `alpha`, at most `max_tiles` of them, or
+/// The tiles of `light` for a lobe of roughness `alpha` ([`tile_alpha`]), at most `max_tiles` of them, or
 /// `None` when they do not fit.
 fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Tile>> {
     let mut region = light.region.clone();
@@ -245,7 +245,7 @@ impl TileSet {
     }
 }
 
-/// The `[direction, 0, power / 4, 0]` rows of every light's tiles' points for a lobe of smaller
+/// The `[direction, 0, power / 4, 0]` rows of every light's tiles' points for a lobe of
 /// roughness `alpha`, at most `max_points` in all; `None` when the lobe is too narrow for that many.
 /// Where every light fits whole ([`super::quadrature_fits`]) these are
 /// [`super::point_table`]'s rows.
