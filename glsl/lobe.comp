@@ -101,9 +101,10 @@ layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 
 // The frame's params.w light samples, the same for every pixel (`LightSampling::frame_samples`):
 // vec4(direction, its set's count × pdf over solid angle), vec4(L_key rgb, 0).
 // A uniform block (`gpu::LIGHT_SET_UNIFORM_BYTES`, at most 1024 samples or points): every invocation reads the
-// same sample at once. In a loop llvmpipe gathers it lane by lane all the same (a scalar load only
-// where no mask is active: `lp_bld_nir_soa.c` `emit_load_ubo`), but without a branch per lane, which a
-// storage buffer read under a mask takes (`block_points` shares each read among four pixels).
+// same sample at once. In a loop llvmpipe gathers it lane by lane all the same (it loads once only at
+// an offset NIR calls always uniform, `lp_bld_nir.c` `visit_load_ubo`, and a loop counter is not),
+// but without a branch per lane, which a storage buffer read under a mask takes (`block_points`
+// shares each read among four pixels).
 layout(std140, set = 0, binding = 7) uniform LightSamples { vec4 v[2048]; } light_set;
 // The accumulation image, where a filtered pass (binding 1: `rough`) adds its light term; a sparse
 // pass's `cells_light` (OUTPUT 2) or the accumulation image again (3: the light term per pixel).
@@ -122,7 +123,6 @@ float normal_tag(vec3 n) {
 // The lights' cones and their half-angles, read once before any branch.
 vec4 g_cone[MAX_LIGHTS];
 float g_extent[MAX_LIGHTS];
-uint g_lights;
 // The light MIS: the lobe, its ω_o, frame rotation q, form, light and BRDF sample counts, and the sum.
 GpuLobe g_lobe;
 vec3 g_wo;
@@ -588,8 +588,8 @@ vec3 near_points(uint near, vec3 n, PointView v1, PointView v2) {
 // OUTPUT 3 with POINTS, a lobe of one component or a split one (`light_samples`' first path): the
 // light term of the four pixels of block c, each with its own reach test, in one loop over the points
 // that reads each point once for the four. In a loop llvmpipe reads a buffer lane by lane, even at an
-// index the same for every lane (`lp_bld_nir_soa.c` `emit_load_ubo`: a scalar load only where no
-// mask is active, and a loop is one): the point's six floats are 48 scalar loads for a vector of 8,
+// index the same for every lane (the loop counter is not an always-uniform offset to NIR, see
+// light_set above): the point's six floats are 48 scalar loads for a vector of 8,
 // about as much as the point's arithmetic. Session 23, 512², the bench's goal scene: its α 0.02 lobe
 // (212 points, 4 pixels a block) against a loop per pixel, see README. With REACH_TEST and tiles,
 // each light's points run for the blocks with a pixel within its reach, and add at all four pixels
@@ -650,7 +650,6 @@ void main() {
     // The lobe is read before any branch (see diffuse.comp: uniform loads under a mask go lane by lane).
     GpuLobe l = MAT.lobes[pc.params.x];
     if (LIGHTS) {
-        g_lights = min(lights.count.x, uint(MAX_LIGHTS));
         // The table holds MAX_LIGHTS lights, the last repeated past the count (`cone_table`; the reach
         // test takes the first LIGHT_SLOTS): constant indices, which llvmpipe loads once for every
         // lane, where an index computed from the count went lane by lane.

@@ -284,9 +284,12 @@ impl Renderer {
                 })
                 .collect()
         };
-        let chosen = choose(false);
-        let tiles: Vec<(u32, TileSet)> = chosen.iter().filter_map(|(i, _, t)| Some((*i, t.clone()?))).collect();
-        let mut lobes: Vec<(u32, lobe::Variant)> = chosen.into_iter().map(|(i, v, _)| (i, v)).collect();
+        let mut tiles: Vec<(u32, TileSet)> = Vec::new();
+        let mut lobes: Vec<(u32, lobe::Variant)> = Vec::new();
+        for (i, v, t) in choose(false) {
+            tiles.extend(t.map(|t| (i, t)));
+            lobes.push((i, v));
+        }
         // The editor builds ahead the variants of the filter's other choice, which a lobe's view of
         // the wide lights follows (`lobe::sees_wide_lights_as_points`): its previews and its settle
         // frame are drawn at different sizes, and a settle frame must not wait for a pipeline.
