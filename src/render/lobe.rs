@@ -359,6 +359,12 @@ impl LobePass {
         Ok(())
     }
 
+    /// Whether a frame can draw `v` now (its own pipeline, or the stand-in of a variant whose output
+    /// depends on the view's size, [`LobePass::ready`]), without collecting or starting builds.
+    pub fn drawable(&self, v: &Variant) -> bool {
+        self.pipelines.contains_key(v) || (v.outputs_vary() && self.pipelines.contains_key(&v.any_output()))
+    }
+
     /// Starts building `variants` in the background (those not built or being built) without
     /// waiting for them: the editor's variants of a view size it will draw next.
     pub fn build_ahead(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<()> {

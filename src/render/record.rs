@@ -284,24 +284,36 @@ impl Renderer {
                 })
                 .collect()
         };
+        // The editor also takes the variants of the filter's other choice, which a lobe's view of the
+        // wide lights follows (`lobe::sees_wide_lights_as_points`): its previews and its settle frame
+        // are drawn at different sizes, and a settle frame must not wait for a pipeline. It builds
+        // them ahead (below), and a frame whose own choice is not built yet but whose other one is
+        // draws with that one (the same material under the same lights, the softbox split off
+        // differently).
+        let mut chosen = choose(false);
+        let mut other = match &self.build_in_background {
+            Some(_) if mesh_view => choose(true),
+            _ => Vec::new(),
+        };
+        if !other.is_empty() {
+            let pass = &self.passes.as_ref().expect("passes live until drop").lobe;
+            let drawable = |set: &[(u32, lobe::Variant, Option<TileSet>)]| set.iter().all(|(_, v, _)| pass.drawable(v));
+            if !drawable(&chosen) && drawable(&other) {
+                std::mem::swap(&mut chosen, &mut other);
+            }
+        }
         let mut tiles: Vec<(u32, TileSet)> = Vec::new();
         let mut lobes: Vec<(u32, lobe::Variant)> = Vec::new();
-        for (i, v, t) in choose(false) {
+        for (i, v, t) in chosen {
             tiles.extend(t.map(|t| (i, t)));
             lobes.push((i, v));
         }
-        // The editor builds ahead the variants of the filter's other choice, which a lobe's view of
-        // the wide lights follows (`lobe::sees_wide_lights_as_points`): its previews and its settle
-        // frame are drawn at different sizes, and a settle frame must not wait for a pipeline.
-        // Their stand-ins (`Output::Any`, what `LobePass::ready` lets a frame draw with).
-        let ahead: Vec<lobe::Variant> = match &self.build_in_background {
-            Some(_) if mesh_view => choose(true)
-                .into_iter()
-                .map(|(_, v, _)| v.any_output())
-                .filter(|v| v.outputs_vary() && lobes.iter().all(|(_, w)| w.any_output() != *v))
-                .collect(),
-            _ => Vec::new(),
-        };
+        // The other choice's stand-ins (`Output::Any`, what `LobePass::ready` lets a frame draw with).
+        let ahead: Vec<lobe::Variant> = other
+            .into_iter()
+            .map(|(_, v, _)| v.any_output())
+            .filter(|v| v.outputs_vary() && lobes.iter().all(|(_, w)| w.any_output() != *v))
+            .collect();
         // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
             .iter()
