@@ -24,6 +24,7 @@
 #extension GL_EXT_control_flow_attributes : require
 #define PIXELS_BINDING 4
 #include "pass.glsl"
+#include "diffuse.glsl"
 // The window's radius in pixels (`denoise::RADIUS`): its blocks, 4 along an odd coordinate, are
 // written out below.
 #define R 3
@@ -39,7 +40,16 @@ layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
 // listed it). Session 22: read here instead of an image of every pixel's normal and mark that
 // compact.comp wrote, one full-size image store less (about 0.8 ms at 512² on llvmpipe).
 layout(set = 0, binding = 3, rgba32f) readonly uniform image2D gnrm;
-// fparams.x: log2(e) / σ².
+// DIFFUSE: the frame's compact pass left the listed pixels at (0, 0, 0, 1) (`compact.comp` LATER),
+// and each pixel takes the diffuse term here first, the same arithmetic (albedo fparams.rgb,
+// params.x the key estimator's lights; stand-ins bound otherwise). Added before the filter's sums,
+// to what the lobe passes added (a narrow lobe's light term at each pixel), as compact.comp's
+// image started: x + d = d + x, so one such term gives the same image, bit for bit.
+layout(constant_id = 0) const bool DIFFUSE = false;
+layout(std430, set = 0, binding = 5) readonly buffer Sh { vec4 c[9]; } sh;
+layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
+DiffuseLight g_diffuse;
+// fparams.w: log2(e) / σ².
 
 // The normal of a tag (`normal_tag` in lobe.comp: 1 + the octahedral code of the normal, 11 bits a
 // coordinate, an integer a float holds exactly); float arithmetic only.
@@ -77,10 +87,11 @@ void add(vec3 t, vec3 L, float w, float window, float lin, inout vec4 sum, inout
 }
 
 // Adds pixel p's means (sum.rgb / sum.a and light.rgb / light.a; its own block's values where every
-// weight underflowed).
-void finish(ivec2 p, bool shaded, vec4 sum, vec4 light, vec3 own, vec3 own_light) {
+// weight underflowed), after its diffuse term (DIFFUSE; n its normal).
+void finish(ivec2 p, bool shaded, vec3 n, vec4 sum, vec4 light, vec3 own, vec3 own_light) {
     if (!shaded) return;
     vec4 acc = imageLoad(accum, p);
+    if (DIFFUSE) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(g_diffuse, n);
     acc.rgb += sum.a > 0.0 ? sum.rgb / sum.a : own;
     acc.rgb += light.a > 0.0 ? light.rgb / light.a : own_light;
     imageStore(accum, p, acc);
@@ -89,7 +100,7 @@ void finish(ivec2 p, bool shaded, vec4 sum, vec4 light, vec3 own, vec3 own_light
 // The sums of a block's four pixels p … p + (1, 1) over their windows, added to the image.
 void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec3 n3, bool s0, bool s1, bool s2,
                   bool s3) {
-    float k_p = pc.fparams.x;
+    float k_p = pc.fparams.w;
     // Weighted sums (rgb) and weights (a) of the four pixels: pixel 1 is (1, 0) (an odd x), pixel 2
     // (0, 1), pixel 3 (1, 1).
     vec4 a0 = vec4(0.0), a1 = vec4(0.0), a2 = vec4(0.0), a3 = vec4(0.0);
@@ -117,13 +128,15 @@ void filter_block(ivec2 b, ivec2 p, ivec2 blocks, vec3 n0, vec3 n1, vec3 n2, vec
             add(t.rgb, L, w3, along(i, true) * along(j, true), linear(i, true) * linear(j, true), a3, l3);
         }
     }
-    finish(p, s0, a0, l0, own, own_light);
-    finish(p + ivec2(1, 0), s1, a1, l1, own, own_light);
-    finish(p + ivec2(0, 1), s2, a2, l2, own, own_light);
-    finish(p + ivec2(1, 1), s3, a3, l3, own, own_light);
+    finish(p, s0, n0, a0, l0, own, own_light);
+    finish(p + ivec2(1, 0), s1, n1, a1, l1, own, own_light);
+    finish(p + ivec2(0, 1), s2, n2, a2, l2, own, own_light);
+    finish(p + ivec2(1, 1), s3, n3, a3, l3, own, own_light);
 }
 
 void main() {
+    // Before any branch (diffuse.glsl).
+    if (DIFFUSE) READ_DIFFUSE_LIGHT(g_diffuse, sh, lights, pc.params.x != 0u);
     ivec2 first;
     if (!listed_pixel(first)) return;
     ivec2 b = first / 2;

@@ -965,6 +965,63 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
     r.ctx.check_validation().unwrap();
 }
 
+/// A frame that rasterises and filters sparsely leaves the diffuse term to the filter
+/// (`compact::Start::Later`: the compact pass stores the background alone, the accumulation image
+/// cleared to (0, 0, 0, 1) under the object); the next frame keeps the G-buffer and draws the term in
+/// the diffuse pass as before. With one lobe whose light term goes to each pixel (`pixel_lights`:
+/// α 0.1 at 128²) the two images are equal bit for bit (x + d = d + x); with two such lobes the sum
+/// at a pixel is taken in another order, so within rounding: the terms are radiances (no sign
+/// cancels), and three additions reassociated differ by at most 3 ulp of the largest partial sum,
+/// so 4 ε of the pixel's value.
+#[test]
+fn the_sparse_filter_adds_the_diffuse_term_of_a_frame_that_rasterises() {
+    let mut r = renderer();
+    r.set_environment(&env("studio.exr")).unwrap();
+    r.set_mesh(&Mesh::sphere()).unwrap();
+    let s = settings(128, 4, Estimator::Key);
+    let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
+    let frame = |r: &mut Renderer, m: &Material, s: &Settings| -> (Vec<String>, Image) {
+        r.begin_frame(m).unwrap();
+        assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
+        r.submit_frame(None, None).unwrap();
+        let image = r.read_mesh_view().unwrap();
+        let starts = |f: &brdf_shop::vk::frame::Finished| {
+            f.timings.iter().any(|t| ["gbuffer", "background", "base"].contains(&t.name.as_str()))
+        };
+        let names = r.take_finished().into_iter().rev().find(starts);
+        (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
+    };
+    let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
+    let material = |alphas: &[f64]| Material {
+        diffuse: [0.2, 0.3, 0.4],
+        normalization: Normalization::Ward,
+        symmetrize: false,
+        lobes: alphas.iter().map(|&a| Lobe::isotropic([0.2; 3], a)).collect(),
+    };
+    for (alphas, exact) in [(&[0.1, 0.3][..], true), (&[0.1, 0.15, 0.3][..], false)] {
+        let m = material(alphas);
+        frame(&mut r, &m, &moved);
+        let (drawn, a) = frame(&mut r, &m, &s);
+        let (kept, b) = frame(&mut r, &m, &s);
+        assert!(has(&drawn, "gbuffer") && has(&drawn, "denoise[sparse,diffuse]"), "{drawn:?}");
+        assert!(!has(&drawn, "diffuse") && !has(&drawn, "denoise[sparse]"), "{drawn:?}");
+        assert!(has(&kept, "diffuse") && has(&kept, "denoise[sparse]"), "{kept:?}");
+        assert!(!has(&kept, "gbuffer") && !has(&kept, "denoise[sparse,diffuse]"), "{kept:?}");
+        assert_finite("deferred diffuse", &a);
+        if exact {
+            assert_eq!(a.pixels, b.pixels, "{alphas:?}: the diffuse term drawn by the filter or the diffuse pass");
+            continue;
+        }
+        for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+            for c in 0..4 {
+                let bound = 4.0 * f32::EPSILON * p[c].abs().max(q[c].abs());
+                assert!((p[c] - q[c]).abs() <= bound, "{alphas:?}: pixel {i} channel {c}: {} against {}", p[c], q[c]);
+            }
+        }
+    }
+    r.ctx.check_validation().unwrap();
+}
+
 /// The editor builds new lobe pipelines off its thread (`Renderer::build_in_background`): a mesh view
 /// whose pipelines are not built yet records nothing (`Recorded::Waiting`) and keeps its image —
 /// black for new targets, which are cleared so that compose may read them (the validation layer

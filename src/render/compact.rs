@@ -54,31 +54,63 @@ pub const LIST_READ: barrier::Scope = (
     ),
 );
 
+/// How the pass starts the listed pixels of the frame's image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Start {
+    /// (0, 0, 0, 1) plus the diffuse term (`Some`: the albedo, and whether the `key` estimator's
+    /// lights are added).
+    Here(Option<([f64; 3], bool)>),
+    /// (0, 0, 0, 1) from a clear, the diffuse term left to the frame's sparse filter
+    /// (`DenoisePass::record`'s `diffuse`), which reads and writes every listed pixel anyway: a
+    /// full-size image store less (`compact.comp` LATER).
+    Later,
+}
+
 pub struct CompactPass {
     pipeline: Pipeline,
+    later: Pipeline,
 }
 
 impl CompactPass {
     pub fn new(ctx: &Context) -> Result<CompactPass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("compact.comp"), "compact", &BINDINGS, 128, &[])?;
-        Ok(CompactPass { pipeline })
+        let spv = crate::spirv!("compact.comp");
+        let pipeline = Pipeline::compute(ctx, spv, "compact", &BINDINGS, 128, &[0])?;
+        match Pipeline::compute(ctx, spv, "compact.later", &BINDINGS, 128, &[1]) {
+            Ok(later) => Ok(CompactPass { pipeline, later }),
+            Err(e) => {
+                pipeline.destroy(ctx);
+                Err(e)
+            }
+        }
     }
 
     /// Rebuilds the list of `rec.targets` from its G-buffer (after the G-buffer pass), and starts the
-    /// frame's image as the background pass would, plus (`diffuse`: the albedo, and whether the
-    /// `key` estimator's lights are added) the diffuse pass's term: in the same pass over the
-    /// G-buffer, one read of it a pixel instead of three.
-    pub fn record(&self, rec: &Recording<'_>, diffuse: Option<([f64; 3], bool)>) -> Result<()> {
+    /// frame's image as the background pass would, plus, as `start` says, the diffuse pass's term:
+    /// in the same pass over the G-buffer, one read of it a pixel instead of three.
+    pub fn record(&self, rec: &Recording<'_>, start: Start) -> Result<()> {
         let (ctx, cmd, t) = (rec.ctx, rec.cmd, rec.targets);
         let env = rec.env()?;
         let mut push = rec.push;
+        let diffuse = match start {
+            Start::Here(d) => d,
+            Start::Later => None,
+        };
         // Without a diffuse term: zero albedo, no lights, and params[1] 0 skips the term.
         let (albedo, residual) = diffuse.unwrap_or(([0.0; 3], false));
         let [sh, lights] = super::diffuse::term(env, albedo, residual, &mut push);
         push.params[1] = u32::from(diffuse.is_some());
-        t.start_accum(ctx, cmd);
+        let pipeline = match start {
+            Start::Here(_) => {
+                t.start_accum(ctx, cmd);
+                &self.pipeline
+            }
+            Start::Later => {
+                t.accum.fill_to_general(ctx, cmd, [0.0, 0.0, 0.0, 1.0], barrier::COMPUTE_READ_WRITE);
+                &self.later
+            }
+        };
         let set = rec.set(
-            &self.pipeline,
+            pipeline,
             &[
                 Binding::StorageImage(t.normal.view),
                 Binding::Storage(&t.pixels),
@@ -100,12 +132,13 @@ impl CompactPass {
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
         // One invocation a 2 × 2 block, 8 × 8 invocations a group; the image's readers after it.
-        rec.dispatch_groups(&self.pipeline, set, &push, (t.width.div_ceil(16), t.height.div_ceil(16)));
+        rec.dispatch_groups(pipeline, set, &push, (t.width.div_ceil(16), t.height.div_ceil(16)));
         barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);
         Ok(())
     }
 
     pub fn destroy(self, ctx: &Context) {
         self.pipeline.destroy(ctx);
+        self.later.destroy(ctx);
     }
 }

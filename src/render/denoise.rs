@@ -29,11 +29,13 @@ use crate::vk::{barrier, Context};
 use crate::Result;
 
 const BINDINGS: [vk::DescriptorType; 3] = [vk::DescriptorType::STORAGE_IMAGE; 3];
-const SPARSE_BINDINGS: [vk::DescriptorType; 5] = [
+const SPARSE_BINDINGS: [vk::DescriptorType; 7] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_BUFFER,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
 
@@ -165,16 +167,26 @@ pub fn sigma(min_alpha: f64, spp: u32) -> f64 {
 pub struct DenoisePass {
     pipeline: Pipeline,
     sparse: Pipeline,
+    /// The sparse pass that adds the diffuse term first (`compact::Start::Later`).
+    sparse_diffuse: Pipeline,
 }
 
 impl DenoisePass {
     pub fn new(ctx: &Context) -> Result<DenoisePass> {
         let pipeline = Pipeline::compute(ctx, crate::spirv!("denoise.comp"), "denoise", &BINDINGS, 128, &[])?;
-        match Pipeline::compute(ctx, crate::spirv!("denoise_sparse.comp"), "denoise.sparse", &SPARSE_BINDINGS, 128, &[])
-        {
-            Ok(sparse) => Ok(DenoisePass { pipeline, sparse }),
+        let spv = crate::spirv!("denoise_sparse.comp");
+        let sparse = match Pipeline::compute(ctx, spv, "denoise.sparse", &SPARSE_BINDINGS, 128, &[0]) {
+            Ok(p) => p,
             Err(e) => {
                 pipeline.destroy(ctx);
+                return Err(e);
+            }
+        };
+        match Pipeline::compute(ctx, spv, "denoise.sparse.diffuse", &SPARSE_BINDINGS, 128, &[1]) {
+            Ok(sparse_diffuse) => Ok(DenoisePass { pipeline, sparse, sparse_diffuse }),
+            Err(e) => {
+                pipeline.destroy(ctx);
+                sparse.destroy(ctx);
                 Err(e)
             }
         }
@@ -182,29 +194,46 @@ impl DenoisePass {
 
     /// Adds the filtered `rough` image into the accumulation image (two passes, through `mid`, which
     /// the first writes whole), or, `sparse`, the blocks' `cells` and `cells_light` (one pass over the
-    /// blocks); `min_alpha`: the smallest `min(αx, αy)` of the lobes in them.
-    pub fn record(&self, rec: &Recording<'_>, min_alpha: f64, spp: u32, sparse: bool) -> Result<()> {
+    /// blocks); `min_alpha`: the smallest `min(αx, αy)` of the lobes in them. `diffuse` (sparse
+    /// only): the diffuse term the frame's compact pass left to this one (`compact::Start::Later`),
+    /// the albedo and whether the `key` estimator's lights are added.
+    pub fn record(
+        &self,
+        rec: &Recording<'_>,
+        min_alpha: f64,
+        spp: u32,
+        sparse: bool,
+        diffuse: Option<([f64; 3], bool)>,
+    ) -> Result<()> {
         let t = rec.targets;
         let sigma = sigma(min_alpha, spp);
         let mut push = rec.push;
-        // 1 / σ², or log2(e) / σ² for the sparse pass's `exp2`.
-        let scale = if sparse { std::f64::consts::LOG2_E } else { 1.0 };
-        push.fparams = [(scale / (sigma * sigma)) as f32, 0.0, 0.0, 0.0];
         if sparse {
+            // The diffuse term's albedo in fparams.rgb and its lights' flag in params[0] (zero and
+            // stand-ins without it), log2(e) / σ² for the pass's `exp2` in fparams.w.
+            let (albedo, residual) = diffuse.unwrap_or(([0.0; 3], false));
+            let [sh, lights] = super::diffuse::term(rec.env()?, albedo, residual, &mut push);
+            push.fparams[3] = (std::f64::consts::LOG2_E / (sigma * sigma)) as f32;
+            let pipeline = if diffuse.is_some() { &self.sparse_diffuse } else { &self.sparse };
             let set = rec.set(
-                &self.sparse,
+                pipeline,
                 &[
                     Binding::StorageImage(t.cells.view),
                     Binding::StorageImage(t.accum.view),
                     Binding::StorageImage(t.cells_light.view),
                     Binding::StorageImage(t.normal.view),
                     Binding::Storage(&t.blocks),
+                    Binding::Storage(sh),
+                    Binding::Storage(lights),
                 ],
             )?;
             // Over the blocks with a shaded pixel (`compact.comp`'s list), not the image's.
-            rec.dispatch_over(&t.blocks, &self.sparse, set, &push);
+            rec.dispatch_over(&t.blocks, pipeline, set, &push);
             return Ok(());
         }
+        debug_assert!(diffuse.is_none(), "the dense filter adds no diffuse term");
+        // 1 / σ².
+        push.fparams = [(1.0 / (sigma * sigma)) as f32, 0.0, 0.0, 0.0];
         // Its old contents are dropped: the first pass writes every pixel.
         t.mid.discard_to_general(rec.ctx, rec.cmd, barrier::COMPUTE_WRITE);
         for (direction, src) in [(0, &t.rough), (1, &t.mid)] {
@@ -225,5 +254,6 @@ impl DenoisePass {
     pub fn destroy(self, ctx: &Context) {
         self.pipeline.destroy(ctx);
         self.sparse.destroy(ctx);
+        self.sparse_diffuse.destroy(ctx);
     }
 }

@@ -432,12 +432,19 @@ impl Renderer {
         // The diffuse pass's term, where the frame has one.
         let diffuse = (settings.estimator != Estimator::Mis && material.diffuse.iter().any(|&d| d != 0.0))
             .then_some((material.diffuse, key));
+        // A frame that rasterises and filters sparsely leaves the diffuse term to the filter, which
+        // reads and writes every listed pixel anyway (`compact::Start::Later`).
+        let later = raster
+            && sparse
+            && settings.estimator != Estimator::Mis
+            && intos.iter().any(|into| matches!(into, lobe::Into::Cells { .. }));
         if raster {
             // The list of shaded pixels belongs to the G-buffer: built with it, timed with it, and the
             // same pass starts the image (`CompactPass::record`): no background and diffuse passes.
+            let start = if later { compact::Start::Later } else { compact::Start::Here(diffuse) };
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
-                passes.compact.record(&rec, diffuse)
+                passes.compact.record(&rec, start)
             })?;
         }
         // A frame that keeps the G-buffer starts from the image the background and diffuse passes
@@ -514,8 +521,13 @@ impl Renderer {
                     })?;
                 }
                 if min_alpha.is_finite() {
-                    let name = if sparse { "denoise[sparse]" } else { "denoise" };
-                    ts.time(ctx, cmd, name, || passes.denoise.record(&rec, min_alpha, settings.spp, sparse))?;
+                    let deferred = diffuse.filter(|_| later);
+                    let name = match (sparse, deferred.is_some()) {
+                        (true, true) => "denoise[sparse,diffuse]",
+                        (true, false) => "denoise[sparse]",
+                        (false, _) => "denoise",
+                    };
+                    ts.time(ctx, cmd, name, || passes.denoise.record(&rec, min_alpha, settings.spp, sparse, deferred))?;
                 }
             }
         }

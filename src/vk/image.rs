@@ -106,6 +106,12 @@ impl Image {
 
     /// Clears the image (a colour image made with `TRANSFER_DST`) to zero in `GENERAL`, ready for `dst`.
     pub fn clear_to_general(&self, ctx: &Context, cmd: vk::CommandBuffer, dst: super::barrier::Scope) {
+        self.fill_to_general(ctx, cmd, [0.0; 4], dst);
+    }
+
+    /// Clears the image (a colour image made with `TRANSFER_DST`, of a float format) to `value` in
+    /// `GENERAL`, ready for `dst`.
+    pub fn fill_to_general(&self, ctx: &Context, cmd: vk::CommandBuffer, value: [f32; 4], dst: super::barrier::Scope) {
         use super::barrier::{EARLIER_READS, TRANSFER_WRITE};
         self.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL, EARLIER_READS, TRANSFER_WRITE);
         let ranges = [range(self.aspect, self.mip_levels)];
@@ -116,7 +122,7 @@ impl Image {
                 cmd,
                 self.raw,
                 vk::ImageLayout::GENERAL,
-                &vk::ClearColorValue::default(),
+                &vk::ClearColorValue { float32: value },
                 &ranges,
             )
         };
