@@ -52,9 +52,32 @@ fn check_winding(m: &Mesh) {
 fn sphere_is_the_unit_sphere() {
     let m = Mesh::sphere();
     assert_eq!(m.name, "sphere");
-    assert_eq!(m.positions.len(), 257 * 129);
-    // 256 × 128 quads, less the 256 degenerate triangles at each pole.
-    assert_eq!(m.triangle_count(), 2 * 256 * 128 - 2 * 256);
+    // Ring r of 127 holds ⌈256 sin(π r / 128)⌉ segments (and one vertex more, φ = 2π), a pole one
+    // vertex; each step along a pair of rings is a triangle.
+    let segments: Vec<usize> = (1..128).map(|r| (256.0 * (PI * f64::from(r) / 128.0).sin()).ceil() as usize).collect();
+    assert_eq!(segments[63], 256);
+    assert_eq!(m.positions.len(), segments.iter().map(|n| n + 1).sum::<usize>() + 2);
+    assert_eq!(m.triangle_count(), 2 * segments.iter().sum::<usize>());
+    assert_eq!(m.triangle_count(), 41_848);
+    // The deepest point of each flat triangle (its vertices on the sphere): the foot of the
+    // perpendicular from the centre where it falls inside the triangle, else the middle of its
+    // longest edge. None sags below the sphere by more than the equator's quads, (Δφ² + Δθ²)/8 with
+    // Δ = π/128 (to f32 rounding of the vertices, 1e-7).
+    let bound = 2.0 * (PI / 128.0).powi(2) / 8.0 + 1e-7;
+    let mut deepest = 0.0f64;
+    for t in m.indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize].as_dvec3());
+        let n = (b - a).cross(c - a).normalize();
+        let foot = n * n.dot(a);
+        let inside = [(a, b), (b, c), (c, a)].iter().all(|(p, q)| (*q - *p).cross(foot - *p).dot(n) >= 0.0);
+        let sag = if inside {
+            1.0 - foot.length()
+        } else {
+            [(a, b), (b, c), (c, a)].iter().map(|(p, q)| 1.0 - ((*p + *q) / 2.0).length()).fold(0.0, f64::max)
+        };
+        deepest = deepest.max(sag);
+    }
+    assert!(deepest <= bound && deepest > 0.9 * bound, "deepest sag {deepest:e} against {bound:e}");
     check_structure(&m);
     check_winding(&m);
     for (p, n) in m.positions.iter().zip(&m.normals) {

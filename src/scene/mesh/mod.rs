@@ -36,12 +36,60 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Unit sphere, 256 segments around and 128 from pole to pole (65,024 triangles; the degenerate
-    /// ones at the poles are left out). A flat triangle sags below the sphere by at most
-    /// `(Δφ² + Δθ²)/8 = 1.5e-4` (Δ = 2π/256 = π/128), which at 1024² with the default camera (radius
-    /// about 495 px) is under 0.08 px; the silhouette, along edges, deviates by `Δ²/8`: under 0.04 px.
+    /// Unit sphere, 128 rings of latitude from pole to pole (Δθ = π/128), each ring of latitude θ cut
+    /// into `⌈256 sin θ⌉` equal segments (so no segment is longer than the equator's 2π/256), the
+    /// poles single vertices; neighbouring rings joined by the shorter diagonal at each step (41,848
+    /// triangles). A flat triangle sags below the sphere by at most `(Δφ² + Δθ²)/8 = 1.5e-4`
+    /// (Δ = 2π/256 = π/128), at the equator, which at 1024² with the default camera (radius about
+    /// 495 px) is under 0.08 px; the silhouette, along edges, deviates by `Δ²/8`: under 0.04 px.
+    /// Session 26: the same worst sag as the 256 × 128 UV sphere before it (`Mesh::uv_sphere`,
+    /// 65,024 triangles), whose rings near the poles held 256 segments each, far shorter than the
+    /// equator's; on llvmpipe a G-buffer pass costs about a triangle's setup and its pixels' blocks
+    /// per triangle drawn, see README.
     pub fn sphere() -> Mesh {
-        Mesh { name: "sphere".into(), ..Mesh::uv_sphere(256, 128) }
+        let (seg, rings) = (256u32, 128u32);
+        let mut positions = Vec::new();
+        // Each ring's first vertex and segment count (0 at a pole, a single vertex); a ring's last
+        // vertex repeats its first (φ = 2π).
+        let mut ring = Vec::with_capacity(rings as usize + 1);
+        for r in 0..=rings {
+            let theta = std::f64::consts::PI * f64::from(r) / f64::from(rings);
+            let n = if r == 0 || r == rings { 0 } else { ((f64::from(seg) * theta.sin()).ceil() as u32).clamp(3, seg) };
+            ring.push((positions.len() as u32, n));
+            for s in 0..=n {
+                let phi = 2.0 * std::f64::consts::PI * f64::from(s) / f64::from(n.max(1));
+                let p = DVec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos());
+                positions.push(p.as_vec3());
+            }
+        }
+        let normals = positions.iter().map(|p| p.normalize()).collect();
+        let mut indices = Vec::new();
+        for pair in ring.windows(2) {
+            let ((a, na), (b, nb)) = (pair[0], pair[1]);
+            let (mut i, mut j) = (0, 0);
+            // Counter-clockwise seen from outside: (upper i, lower j, upper i + 1) and (upper i,
+            // lower j, lower j + 1); a pole (no segments) is the apex of the other ring's fan.
+            while i < na || j < nb {
+                let upper = if na == 0 {
+                    false
+                } else if nb == 0 || j == nb {
+                    true
+                } else if i == na {
+                    false
+                } else {
+                    let d = |x: u32, y: u32| (positions[x as usize] - positions[y as usize]).as_dvec3().length();
+                    d(a + i + 1, b + j) <= d(a + i, b + j + 1)
+                };
+                if upper {
+                    indices.extend_from_slice(&[a + i, b + j, a + i + 1]);
+                    i += 1;
+                } else {
+                    indices.extend_from_slice(&[a + i, b + j, b + j + 1]);
+                    j += 1;
+                }
+            }
+        }
+        Mesh { name: "sphere".into(), positions, normals, indices }
     }
 
     /// A unit UV sphere with `seg` segments around and `rings` from pole to pole (at least 3 and 2):
