@@ -21,6 +21,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // see README). A constant, not a push constant: llvmpipe runs both sides of an `if`, so the diffuse
 // term's code would run, masked, in every frame.
 layout(constant_id = 0) const bool LATER = false;
+// PIXELS: the list of pixels is written (the blocks' always). A frame whose passes all run over the
+// blocks leaves it to the next frame that keeps the G-buffer and needs it (`compact::Start`): its
+// appends cost about 1 ms of a 512² frame on llvmpipe (session 26).
+layout(constant_id = 1) const bool PIXELS = true;
 layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
 layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
@@ -82,7 +86,7 @@ void main() {
             if (!LATER && diffuse && listed) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, normal);
             imageStore(accum, p, acc);
         }
-        APPEND(pixels, listed, uint(p.x) | (uint(p.y) << 16));
+        if (PIXELS) APPEND(pixels, listed, uint(p.x) | (uint(p.y) << 16));
         if (listed && rep.x < 0) rep = p;
     }
     // The block's first listed pixel, in the order (0, 0), (1, 0), (0, 1), (1, 1).

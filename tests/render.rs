@@ -879,6 +879,20 @@ fn the_in_cone_light_terms_after_the_sample_loop_equal_those_taken_in_it() {
     r.seed = 0;
 }
 
+/// One frame recorded and submitted as the editor does (`Progress::Fresh`): its passes' names and
+/// the mesh view's image.
+fn frame(r: &mut Renderer, m: &Material, s: &Settings) -> (Vec<String>, Image) {
+    r.begin_frame(m).unwrap();
+    assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
+    r.submit_frame(None, None).unwrap();
+    let image = r.read_mesh_view().unwrap();
+    let starts = |f: &brdf_shop::vk::frame::Finished| {
+        f.timings.iter().any(|t| ["gbuffer", "compact", "background", "base"].contains(&t.name.as_str()))
+    };
+    let names = r.take_finished().into_iter().rev().find(starts);
+    (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
+}
+
 /// The editor's frames keep the G-buffer while mesh, camera and size are unchanged (a stroke or a
 /// refinement frame does not rasterise again), and rasterise when the camera moves; the kept
 /// G-buffer gives the same image as a fresh one (bit for bit: the same shading passes read it).
@@ -897,17 +911,6 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
     for estimator in [Estimator::Fis, Estimator::Key] {
         let s = settings(32, 4, estimator);
         let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
-        let frame = |r: &mut Renderer, m: &Material, s: &Settings| -> (Vec<String>, Image) {
-            r.begin_frame(m).unwrap();
-            assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
-            r.submit_frame(None, None).unwrap();
-            let image = r.read_mesh_view().unwrap();
-            let starts = |f: &brdf_shop::vk::frame::Finished| {
-                f.timings.iter().any(|t| ["gbuffer", "background", "base"].contains(&t.name.as_str()))
-            };
-            let names = r.take_finished().into_iter().rev().find(starts);
-            (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
-        };
         let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
         // Another camera first, so that the first frame rasterises (the loop's last render kept
         // its G-buffer).
@@ -967,8 +970,10 @@ fn frames_reuse_the_gbuffer_until_the_camera_moves() {
 
 /// A frame that rasterises and filters sparsely leaves the diffuse term to the filter
 /// (`compact::Start::Later`: the compact pass stores the background alone, the accumulation image
-/// cleared to (0, 0, 0, 1) under the object); the next frame keeps the G-buffer and draws the term in
-/// the diffuse pass as before. With one lobe whose light term goes to each pixel (`pixel_lights`:
+/// cleared to (0, 0, 0, 1) under the object), and, its passes all running over the blocks, the list
+/// of pixels empty; the next frame keeps the G-buffer, lists the pixels and draws the background and
+/// diffuse term in the compact pass (`compact`, in place of `background` and `diffuse`), the one
+/// after it starts from their image (`base`). With one lobe whose light term goes to each pixel (`pixel_lights`:
 /// α 0.1 at 128²) the two images are equal bit for bit (x + d = d + x); with two such lobes the sum
 /// at a pixel is taken in another order, so within rounding: the terms are radiances (no sign
 /// cancels), and three additions reassociated differ by at most 3 ulp of the largest partial sum,
@@ -980,17 +985,6 @@ fn the_sparse_filter_adds_the_diffuse_term_of_a_frame_that_rasterises() {
     r.set_mesh(&Mesh::sphere()).unwrap();
     let s = settings(128, 4, Estimator::Key);
     let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
-    let frame = |r: &mut Renderer, m: &Material, s: &Settings| -> (Vec<String>, Image) {
-        r.begin_frame(m).unwrap();
-        assert_eq!(r.record(m, s, Progress::Fresh).unwrap(), Recorded::Done);
-        r.submit_frame(None, None).unwrap();
-        let image = r.read_mesh_view().unwrap();
-        let starts = |f: &brdf_shop::vk::frame::Finished| {
-            f.timings.iter().any(|t| ["gbuffer", "background", "base"].contains(&t.name.as_str()))
-        };
-        let names = r.take_finished().into_iter().rev().find(starts);
-        (names.unwrap().timings.into_iter().map(|t| t.name).collect(), image)
-    };
     let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
     let material = |alphas: &[f64]| Material {
         diffuse: [0.2, 0.3, 0.4],
@@ -1003,10 +997,13 @@ fn the_sparse_filter_adds_the_diffuse_term_of_a_frame_that_rasterises() {
         frame(&mut r, &m, &moved);
         let (drawn, a) = frame(&mut r, &m, &s);
         let (kept, b) = frame(&mut r, &m, &s);
+        let (restored, c) = frame(&mut r, &m, &s);
         assert!(has(&drawn, "gbuffer") && has(&drawn, "denoise[sparse,diffuse]"), "{drawn:?}");
         assert!(!has(&drawn, "diffuse") && !has(&drawn, "denoise[sparse]"), "{drawn:?}");
-        assert!(has(&kept, "diffuse") && has(&kept, "denoise[sparse]"), "{kept:?}");
-        assert!(!has(&kept, "gbuffer") && !has(&kept, "denoise[sparse,diffuse]"), "{kept:?}");
+        assert!(has(&kept, "compact") && has(&kept, "base.save") && has(&kept, "denoise[sparse]"), "{kept:?}");
+        assert!(!has(&kept, "gbuffer") && !has(&kept, "background") && !has(&kept, "diffuse"), "{kept:?}");
+        assert!(has(&restored, "base") && !has(&restored, "compact"), "{restored:?}");
+        assert_eq!(b.pixels, c.pixels, "{alphas:?}: the kept base");
         assert_finite("deferred diffuse", &a);
         if exact {
             assert_eq!(a.pixels, b.pixels, "{alphas:?}: the diffuse term drawn by the filter or the diffuse pass");

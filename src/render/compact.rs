@@ -62,38 +62,56 @@ pub enum Start {
     Here(Option<([f64; 3], bool)>),
     /// (0, 0, 0, 1) from a clear, the diffuse term left to the frame's sparse filter
     /// (`DenoisePass::record`'s `diffuse`), which reads and writes every listed pixel anyway: a
-    /// full-size image store less (`compact.comp` LATER).
-    Later,
+    /// full-size image store less (`compact.comp` LATER). `pixels`: whether the list of pixels is
+    /// written too (a frame whose passes all run over the blocks leaves it empty, `Targets::pixels_listed`).
+    Later { pixels: bool },
+}
+
+impl Start {
+    /// Whether the pass lists the pixels (it always lists the blocks).
+    pub fn lists_pixels(self) -> bool {
+        !matches!(self, Start::Later { pixels: false })
+    }
 }
 
 pub struct CompactPass {
-    pipeline: Pipeline,
-    later: Pipeline,
+    /// `Start::Here`, `Start::Later` with the pixels listed, and without (`compact.comp`'s LATER
+    /// and PIXELS).
+    pipelines: [Pipeline; 3],
 }
 
 impl CompactPass {
     pub fn new(ctx: &Context) -> Result<CompactPass> {
         let spv = crate::spirv!("compact.comp");
-        let pipeline = Pipeline::compute(ctx, spv, "compact", &BINDINGS, 128, &[0])?;
-        match Pipeline::compute(ctx, spv, "compact.later", &BINDINGS, 128, &[1]) {
-            Ok(later) => Ok(CompactPass { pipeline, later }),
-            Err(e) => {
-                pipeline.destroy(ctx);
-                Err(e)
+        let mut made = Vec::new();
+        for (name, spec) in [("compact", [0, 1]), ("compact.later", [1, 1]), ("compact.later.blocks", [1, 0])] {
+            match Pipeline::compute(ctx, spv, name, &BINDINGS, 128, &spec) {
+                Ok(p) => made.push(p),
+                Err(e) => {
+                    for p in made {
+                        p.destroy(ctx);
+                    }
+                    return Err(e);
+                }
             }
+        }
+        match made.try_into() {
+            Ok(pipelines) => Ok(CompactPass { pipelines }),
+            Err(_) => unreachable!("three pipelines made above"),
         }
     }
 
-    /// Rebuilds the list of `rec.targets` from its G-buffer (after the G-buffer pass), and starts the
-    /// frame's image as the background pass would, plus, as `start` says, the diffuse pass's term:
-    /// in the same pass over the G-buffer, one read of it a pixel instead of three.
+    /// Rebuilds the lists of `rec.targets` from its G-buffer (after the G-buffer pass; the pixels'
+    /// as `start` says), and starts the frame's image as the background pass would, plus, as `start`
+    /// says, the diffuse pass's term: in the same pass over the G-buffer, one read of it a pixel
+    /// instead of three.
     pub fn record(&self, rec: &Recording<'_>, start: Start) -> Result<()> {
         let (ctx, cmd, t) = (rec.ctx, rec.cmd, rec.targets);
         let env = rec.env()?;
         let mut push = rec.push;
         let diffuse = match start {
             Start::Here(d) => d,
-            Start::Later => None,
+            Start::Later { .. } => None,
         };
         // Without a diffuse term: zero albedo, no lights, and params[1] 0 skips the term.
         let (albedo, residual) = diffuse.unwrap_or(([0.0; 3], false));
@@ -102,11 +120,11 @@ impl CompactPass {
         let pipeline = match start {
             Start::Here(_) => {
                 t.start_accum(ctx, cmd);
-                &self.pipeline
+                &self.pipelines[0]
             }
-            Start::Later => {
+            Start::Later { pixels } => {
                 t.accum.fill_to_general(ctx, cmd, [0.0, 0.0, 0.0, 1.0], barrier::COMPUTE_READ_WRITE);
-                &self.later
+                &self.pipelines[if pixels { 1 } else { 2 }]
             }
         };
         let set = rec.set(
@@ -138,7 +156,8 @@ impl CompactPass {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        self.pipeline.destroy(ctx);
-        self.later.destroy(ctx);
+        for p in self.pipelines {
+            p.destroy(ctx);
+        }
     }
 }

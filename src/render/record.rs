@@ -412,6 +412,7 @@ impl Renderer {
         if raster {
             // Set again once the whole view is recorded (an error leaves nothing to reuse).
             targets.gbuffer_of = None;
+            targets.pixels_listed = false;
         }
         // Set again at the end, the same way (a frame that saves it may stop half-recorded).
         let base_of = targets.base_of.take();
@@ -438,27 +439,38 @@ impl Renderer {
             && sparse
             && settings.estimator != Estimator::Mis
             && intos.iter().any(|into| matches!(into, lobe::Into::Cells { .. }));
+        // Whether a pass of this frame runs over the list of pixels (the others run over the blocks).
+        let over_pixels =
+            settings.estimator == Estimator::Mis || intos.iter().any(|into| !matches!(into, lobe::Into::Cells { .. }));
         if raster {
-            // The list of shaded pixels belongs to the G-buffer: built with it, timed with it, and the
-            // same pass starts the image (`CompactPass::record`): no background and diffuse passes.
-            let start = if later { compact::Start::Later } else { compact::Start::Here(diffuse) };
+            // The lists of shaded pixels and blocks belong to the G-buffer: built with it, timed with
+            // it, and the same pass starts the image (`CompactPass::record`): no background and
+            // diffuse passes. Where no pass runs over the pixels, their list waits for a frame that
+            // keeps the G-buffer and needs it (`Targets::pixels_listed`).
+            let start =
+                if later { compact::Start::Later { pixels: over_pixels } } else { compact::Start::Here(diffuse) };
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
                 passes.compact.record(&rec, start)
             })?;
         }
+        // A frame that keeps a G-buffer whose pixels are not listed lists them, in the pass that
+        // starts the image as the background and diffuse passes would (bit for bit, session 22).
+        let relist = !raster && !targets.pixels_listed;
         // A frame that keeps the G-buffer starts from the image the background and diffuse passes
         // left the frame before (`Targets::base`): while painting only the lobes change.
         let base_key = (settings.estimator != Estimator::Mis && !raster).then(|| {
             let env = self.env.as_ref().map(|e| e.key.clone()).unwrap_or_default();
             (env, key, material.diffuse.map(f64::to_bits))
         });
-        let restored = base_key.is_some() && base_of == base_key;
+        let restored = base_key.is_some() && base_of == base_key && !relist;
         if restored {
             ts.time(ctx, cmd, "base", || {
                 targets.restore_base(ctx, cmd);
                 Ok(())
             })?;
+        } else if relist {
+            ts.time(ctx, cmd, "compact", || passes.compact.record(&rec, compact::Start::Here(diffuse)))?;
         } else if !raster {
             ts.time(ctx, cmd, "background", || passes.background.record(&rec))?;
         }
@@ -468,7 +480,7 @@ impl Renderer {
                 ts.time(ctx, cmd, "mis", || passes.mis.record(&rec, offset, settings.spp, material_buf, seq))?;
             }
             Estimator::Fis | Estimator::Plain | Estimator::Key => {
-                if let Some((albedo, residual)) = diffuse.filter(|_| !restored && !raster) {
+                if let Some((albedo, residual)) = diffuse.filter(|_| !restored && !raster && !relist) {
                     ts.time(ctx, cmd, "diffuse", || passes.diffuse.record(&rec, albedo, residual))?;
                 }
                 if !restored && base_key.is_some() {
@@ -541,6 +553,9 @@ impl Renderer {
         }
         let targets = self.views[slot].as_mut().expect("made above");
         targets.gbuffer_of = gbuffer_key;
+        if raster || relist {
+            targets.pixels_listed = !raster || !later || over_pixels;
+        }
         // A `mis` frame leaves `base` as it was.
         targets.base_of = if raster { None } else { base_key.or(base_of) };
         targets.drawn = true;

@@ -34,6 +34,10 @@ pub struct Targets {
     pub blocks: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
+    /// `pixels` lists the G-buffer's shaded pixels: a frame that rasterises and needs no pass over
+    /// them leaves the list empty (`compact::Start`), and the next frame that keeps the G-buffer and
+    /// needs it lists them (session 26).
+    pub pixels_listed: bool,
     /// The accumulation image as the background and diffuse passes left it, kept for frames that
     /// keep the G-buffer (painting: only the lobes change), and what it was made from.
     pub base: Image,
@@ -118,6 +122,7 @@ impl Targets {
             pixels,
             blocks,
             gbuffer_of: None,
+            pixels_listed: false,
             base_of: None,
             drawn: false,
         })
