@@ -16,10 +16,11 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 // LATER: the frame's sparse filter (denoise_sparse.comp, which reads and writes every listed pixel
 // anyway) adds the diffuse term, and the image was cleared to (0, 0, 0, 1) before this pass
-// (`CompactPass::record`): only the background is stored here. On llvmpipe an image store goes lane
-// by lane, a masked-off lane at the price of a test (session 26, the bench's goal scene at 512²:
-// see README). A constant, not a push constant: llvmpipe runs both sides of an `if`, so the diffuse
-// term's code would run, masked, in every frame.
+// (`CompactPass::record`): nothing is stored here, and the background is left to the background
+// pass over the blocks this one lists (binding 7). On llvmpipe an image store goes lane by lane
+// (about 8 ns a pixel), and a texture lookup runs for every lane whatever its mask (session 26, the
+// bench's goal scene at 512²: see README). A constant, not a push constant: llvmpipe runs both
+// sides of an `if`, so the code of both ways would run, masked, in every frame.
 layout(constant_id = 0) const bool LATER = false;
 // PIXELS: the list of pixels is written (the blocks' always). A frame whose passes all run over the
 // blocks leaves it to the next frame that keeps the G-buffer and needs it (`compact::Start`): its
@@ -35,11 +36,16 @@ layout(std430, set = 0, binding = 2) buffer Blocks { uint count; uint groups[3];
 // The frame's image, started here in a frame that rasterises (background.comp and diffuse.comp
 // otherwise): the environment (level 0) behind the object with alpha 0, (0, 0, 0, 1) on it, plus the
 // diffuse term at the listed pixels where params.y = 1 (albedo fparams.rgb, params.x the key
-// estimator's lights, as diffuse.comp takes them); with LATER the background alone.
+// estimator's lights, as diffuse.comp takes them); with LATER nothing (see above).
 layout(set = 0, binding = 3, rgba32f) writeonly uniform image2D accum;
 layout(set = 0, binding = 4) uniform sampler2D env_tex;
 layout(std430, set = 0, binding = 5) readonly buffer Sh { vec4 c[9]; } sh;
 layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 v[]; } lights;
+// LATER: the 2 × 2 blocks with a pixel inside the image and off the object, each by its top-left
+// pixel, for the background pass over them (background.comp BLOCKS): on llvmpipe a texture lookup
+// runs for every lane of a vector, so here it ran at every pixel of the image, three quarters of
+// them on the object (session 26: about 3 ms of a 512² frame, see README).
+layout(std430, set = 0, binding = 7) buffer BackgroundBlocks { uint count; uint groups[3]; uint at[]; } background;
 
 // Whether pixel p (inside the image or not) is listed (`facing` in pass.glsl), and its unit normal.
 // `object`: the G-buffer holds the mesh there (background.comp's test).
@@ -75,12 +81,14 @@ void main() {
     bool diffuse = pc.params.y != 0u;
     ivec2 c = ivec2(gl_GlobalInvocationID.xy);
     ivec2 rep = ivec2(-1);
+    bool off_object = false;
     [[unroll]] for (int k = 0; k < 4; k++) {
         ivec2 p = 2 * c + ivec2(k & 1, k >> 1);
         vec3 normal;
         bool object;
         bool listed = listed_at(p, normal, object);
-        if (inside(p) && !(LATER && object)) {
+        if (LATER) off_object = off_object || (inside(p) && !object);
+        if (!LATER && inside(p)) {
             vec4 acc = vec4(0.0, 0.0, 0.0, 1.0);
             if (!object) acc = vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), 0.0).rgb, 0.0);
             if (!LATER && diffuse && listed) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, normal);
@@ -91,4 +99,5 @@ void main() {
     }
     // The block's first listed pixel, in the order (0, 0), (1, 0), (0, 1), (1, 1).
     APPEND(blocks, rep.x >= 0, uint(rep.x) | (uint(rep.y) << 16));
+    if (LATER) APPEND(background, off_object, uint(2 * c.x) | (uint(2 * c.y) << 16));
 }

@@ -1,5 +1,7 @@
 //! Pass 1 (mesh views): starts the accumulation image — the environment at level 0 behind the
-//! object (alpha 0) and `(0, 0, 0, 1)` on it.
+//! object (alpha 0) and `(0, 0, 0, 1)` on it. In a frame that rasterises and filters sparsely
+//! (`compact::Start::Later`) it runs over the blocks with a pixel off the object instead
+//! ([`BackgroundPass::record_blocks`]).
 
 use ash::vk;
 
@@ -9,36 +11,65 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 3] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::COMBINED_IMAGE_SAMPLER];
+const BINDINGS: [vk::DescriptorType; 4] = [
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::STORAGE_IMAGE,
+    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
+];
 
 pub struct BackgroundPass {
     pipeline: Pipeline,
+    /// `background.comp` BLOCKS: over the list of blocks with a pixel off the object.
+    blocks: Pipeline,
 }
 
 impl BackgroundPass {
     pub fn new(ctx: &Context) -> Result<BackgroundPass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("background.comp"), "background", &BINDINGS, 128, &[])?;
-        Ok(BackgroundPass { pipeline })
+        let spv = crate::spirv!("background.comp");
+        let pipeline = Pipeline::compute(ctx, spv, "background", &BINDINGS, 128, &[0])?;
+        match Pipeline::compute(ctx, spv, "background.blocks", &BINDINGS, 128, &[1]) {
+            Ok(blocks) => Ok(BackgroundPass { pipeline, blocks }),
+            Err(e) => {
+                pipeline.destroy(ctx);
+                Err(e)
+            }
+        }
     }
 
+    /// The whole image: the environment off the object, `(0, 0, 0, 1)` on it.
     pub fn record(&self, rec: &Recording<'_>) -> Result<()> {
-        let t = rec.targets;
-        let env = rec.env()?;
-        t.start_accum(rec.ctx, rec.cmd);
-        let set = rec.set(
-            &self.pipeline,
-            &[
-                Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(t.accum.view),
-                Binding::Sampled(env.texture.view, env.sampler),
-            ],
-        )?;
+        rec.targets.start_accum(rec.ctx, rec.cmd);
+        let set = self.set(rec, &self.pipeline)?;
         rec.dispatch(&self.pipeline, set, &rec.push);
         Ok(())
     }
 
+    /// The environment at the pixels off the object of the blocks `compact.comp` listed
+    /// (`Targets::background_blocks`; after the compact pass with `Start::Later`, which cleared the
+    /// image to `(0, 0, 0, 1)`): the same values as [`Self::record`]'s.
+    pub fn record_blocks(&self, rec: &Recording<'_>) -> Result<()> {
+        let set = self.set(rec, &self.blocks)?;
+        rec.dispatch_over(&rec.targets.background_blocks, &self.blocks, set, &rec.push);
+        Ok(())
+    }
+
+    fn set(&self, rec: &Recording<'_>, pipeline: &Pipeline) -> Result<vk::DescriptorSet> {
+        let t = rec.targets;
+        let env = rec.env()?;
+        rec.set(
+            pipeline,
+            &[
+                Binding::StorageImage(t.normal.view),
+                Binding::StorageImage(t.accum.view),
+                Binding::Sampled(env.texture.view, env.sampler),
+                Binding::Storage(&t.background_blocks),
+            ],
+        )
+    }
+
     pub fn destroy(self, ctx: &Context) {
         self.pipeline.destroy(ctx);
+        self.blocks.destroy(ctx);
     }
 }

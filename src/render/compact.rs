@@ -12,12 +12,13 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 7] = [
+const BINDINGS: [vk::DescriptorType; 8] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+    vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
 ];
@@ -62,7 +63,9 @@ pub enum Start {
     Here(Option<([f64; 3], bool)>),
     /// (0, 0, 0, 1) from a clear, the diffuse term left to the frame's sparse filter
     /// (`DenoisePass::record`'s `diffuse`), which reads and writes every listed pixel anyway: a
-    /// full-size image store less (`compact.comp` LATER). `pixels`: whether the list of pixels is
+    /// full-size image store less (`compact.comp` LATER); the background left to the background pass
+    /// over the blocks with a pixel off the object, which this one lists
+    /// (`BackgroundPass::record_blocks`, after it). `pixels`: whether the list of pixels is
     /// written too (a frame whose passes all run over the blocks leaves it empty, `Targets::pixels_listed`).
     Later { pixels: bool },
 }
@@ -137,6 +140,7 @@ impl CompactPass {
                 Binding::Sampled(env.texture.view, env.sampler),
                 Binding::Storage(sh),
                 Binding::Storage(lights),
+                Binding::Storage(&t.background_blocks),
             ],
         )?;
         // The previous list's readers (an earlier frame may still be in flight) before the reset.
@@ -147,6 +151,7 @@ impl CompactPass {
         unsafe {
             ctx.raw().cmd_update_buffer(cmd, t.pixels.raw, 0, bytemuck::cast_slice(&header));
             ctx.raw().cmd_update_buffer(cmd, t.blocks.raw, 0, bytemuck::cast_slice(&header));
+            ctx.raw().cmd_update_buffer(cmd, t.background_blocks.raw, 0, bytemuck::cast_slice(&header));
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
         // One invocation a 2 × 2 block, 8 × 8 invocations a group; the image's readers after it.

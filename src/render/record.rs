@@ -451,7 +451,11 @@ impl Renderer {
                 if later { compact::Start::Later { pixels: over_pixels } } else { compact::Start::Here(diffuse) };
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
-                passes.compact.record(&rec, start)
+                passes.compact.record(&rec, start)?;
+                if later {
+                    passes.background.record_blocks(&rec)?;
+                }
+                Ok(())
             })?;
         }
         // A frame that keeps a G-buffer whose pixels are not listed lists them, in the pass that

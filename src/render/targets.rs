@@ -32,6 +32,9 @@ pub struct Targets {
     /// The 2 × 2 blocks with a shaded pixel, each by its first shaded pixel (`compact`): the sparse
     /// filtered lobe passes run over it.
     pub blocks: Buffer,
+    /// The 2 × 2 blocks with a pixel off the object, each by its top-left pixel (`compact` with
+    /// `Start::Later`): the background pass of such a frame runs over it (`BackgroundPass::record_blocks`).
+    pub background_blocks: Buffer,
     /// What the G-buffer holds — mesh, camera, culling — while it may be reused (`None`: nothing).
     pub gbuffer_of: Option<GBufferKey>,
     /// `pixels` lists the G-buffer's shaded pixels: a frame that rasterises and needs no pass over
@@ -58,7 +61,7 @@ impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
         let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
         let mut made: Vec<Image> = Vec::new();
-        let built = (|| -> Result<(Buffer, Buffer)> {
+        let built = (|| -> Result<[Buffer; 3]> {
             made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
             made.push(Image::new(
                 ctx,
@@ -87,16 +90,25 @@ impl Targets {
             };
             made.push(cells("rough.cells")?);
             made.push(cells("rough.cells_light")?);
-            let pixels = super::compact::list_buffer(ctx, u64::from(width) * u64::from(height), "pixels")?;
-            match super::compact::list_buffer(ctx, u64::from(half.0) * u64::from(half.1), "blocks") {
-                Ok(blocks) => Ok((pixels, blocks)),
-                Err(e) => {
-                    pixels.destroy(ctx);
-                    Err(e)
+            let mut lists = Vec::new();
+            let entries = [u64::from(width) * u64::from(height), u64::from(half.0) * u64::from(half.1)];
+            for (name, entries) in [("pixels", entries[0]), ("blocks", entries[1]), ("background.blocks", entries[1])] {
+                match super::compact::list_buffer(ctx, entries, name) {
+                    Ok(list) => lists.push(list),
+                    Err(e) => {
+                        for list in lists {
+                            list.destroy(ctx);
+                        }
+                        return Err(e);
+                    }
                 }
             }
+            match <[Buffer; 3]>::try_from(lists) {
+                Ok(lists) => Ok(lists),
+                Err(_) => unreachable!("three lists made above"),
+            }
         })();
-        let (pixels, blocks) = match built {
+        let [pixels, blocks, background_blocks] = match built {
             Ok(b) => b,
             Err(e) => {
                 for i in made {
@@ -121,6 +133,7 @@ impl Targets {
             cells_light: next(),
             pixels,
             blocks,
+            background_blocks,
             gbuffer_of: None,
             pixels_listed: false,
             base_of: None,
@@ -169,5 +182,6 @@ impl Targets {
         }
         self.pixels.destroy(ctx);
         self.blocks.destroy(ctx);
+        self.background_blocks.destroy(ctx);
     }
 }
