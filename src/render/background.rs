@@ -26,15 +26,10 @@ pub struct BackgroundPass {
 
 impl BackgroundPass {
     pub fn new(ctx: &Context) -> Result<BackgroundPass> {
-        let spv = crate::spirv!("background.comp");
-        let pipeline = Pipeline::compute(ctx, spv, "background", &BINDINGS, 128, &[0])?;
-        match Pipeline::compute(ctx, spv, "background.blocks", &BINDINGS, 128, &[1]) {
-            Ok(blocks) => Ok(BackgroundPass { pipeline, blocks }),
-            Err(e) => {
-                pipeline.destroy(ctx);
-                Err(e)
-            }
-        }
+        let variants = [("background", &[0][..]), ("background.blocks", &[1])];
+        let [pipeline, blocks] =
+            Pipeline::compute_variants(ctx, crate::spirv!("background.comp"), &BINDINGS, 128, variants)?;
+        Ok(BackgroundPass { pipeline, blocks })
     }
 
     /// The whole image: the environment off the object, `(0, 0, 0, 1)` on it.

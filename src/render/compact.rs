@@ -85,23 +85,9 @@ pub struct CompactPass {
 
 impl CompactPass {
     pub fn new(ctx: &Context) -> Result<CompactPass> {
-        let spv = crate::spirv!("compact.comp");
-        let mut made = Vec::new();
-        for (name, spec) in [("compact", [0, 1]), ("compact.later", [1, 1]), ("compact.later.blocks", [1, 0])] {
-            match Pipeline::compute(ctx, spv, name, &BINDINGS, 128, &spec) {
-                Ok(p) => made.push(p),
-                Err(e) => {
-                    for p in made {
-                        p.destroy(ctx);
-                    }
-                    return Err(e);
-                }
-            }
-        }
-        match made.try_into() {
-            Ok(pipelines) => Ok(CompactPass { pipelines }),
-            Err(_) => unreachable!("three pipelines made above"),
-        }
+        let variants = [("compact", &[0, 1][..]), ("compact.later", &[1, 1]), ("compact.later.blocks", &[1, 0])];
+        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compact.comp"), &BINDINGS, 128, variants)?;
+        Ok(CompactPass { pipelines })
     }
 
     /// Rebuilds the lists of `rec.targets` from its G-buffer (after the G-buffer pass; the pixels'

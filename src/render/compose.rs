@@ -74,24 +74,9 @@ pub struct ComposePass {
 
 impl ComposePass {
     pub fn new(ctx: &Context) -> Result<ComposePass> {
-        let spv = crate::spirv!("compose.comp");
-        let mesh = Pipeline::compute(ctx, spv, "compose.mesh", &BINDINGS, 96, &[1])?;
-        let canvas = match Pipeline::compute(ctx, spv, "compose.canvas", &BINDINGS, 96, &[2]) {
-            Ok(p) => p,
-            Err(e) => {
-                mesh.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let grey = match Pipeline::compute(ctx, spv, "compose.grey", &BINDINGS, 96, &[4]) {
-            Ok(p) => p,
-            Err(e) => {
-                mesh.destroy(ctx);
-                canvas.destroy(ctx);
-                return Err(e);
-            }
-        };
-        Ok(ComposePass { pipelines: [mesh, canvas, grey] })
+        let variants = [("compose.mesh", &[1][..]), ("compose.canvas", &[2]), ("compose.grey", &[4])];
+        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compose.comp"), &BINDINGS, 96, variants)?;
+        Ok(ComposePass { pipelines })
     }
 
     /// Writes the `parts` of `window` (left in `GENERAL`, ordered before transfer reads) from `mesh`

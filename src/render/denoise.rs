@@ -174,19 +174,11 @@ pub struct DenoisePass {
 impl DenoisePass {
     pub fn new(ctx: &Context) -> Result<DenoisePass> {
         let pipeline = Pipeline::compute(ctx, crate::spirv!("denoise.comp"), "denoise", &BINDINGS, 128, &[])?;
-        let spv = crate::spirv!("denoise_sparse.comp");
-        let sparse = match Pipeline::compute(ctx, spv, "denoise.sparse", &SPARSE_BINDINGS, 128, &[0]) {
-            Ok(p) => p,
+        let variants = [("denoise.sparse", &[0][..]), ("denoise.sparse.diffuse", &[1])];
+        match Pipeline::compute_variants(ctx, crate::spirv!("denoise_sparse.comp"), &SPARSE_BINDINGS, 128, variants) {
+            Ok([sparse, sparse_diffuse]) => Ok(DenoisePass { pipeline, sparse, sparse_diffuse }),
             Err(e) => {
                 pipeline.destroy(ctx);
-                return Err(e);
-            }
-        };
-        match Pipeline::compute(ctx, spv, "denoise.sparse.diffuse", &SPARSE_BINDINGS, 128, &[1]) {
-            Ok(sparse_diffuse) => Ok(DenoisePass { pipeline, sparse, sparse_diffuse }),
-            Err(e) => {
-                pipeline.destroy(ctx);
-                sparse.destroy(ctx);
                 Err(e)
             }
         }

@@ -442,13 +442,12 @@ impl Renderer {
         // Whether a pass of this frame runs over the list of pixels (the others run over the blocks).
         let over_pixels =
             settings.estimator == Estimator::Mis || intos.iter().any(|into| !matches!(into, lobe::Into::Cells { .. }));
+        // The lists of shaded pixels and blocks belong to the G-buffer: built with it, timed with it,
+        // and the same pass starts the image (`CompactPass::record`): no background and diffuse
+        // passes. Where no pass runs over the pixels, their list waits for a frame that keeps the
+        // G-buffer and needs it (`Targets::pixels_listed`).
+        let start = if later { compact::Start::Later { pixels: over_pixels } } else { compact::Start::Here(diffuse) };
         if raster {
-            // The lists of shaded pixels and blocks belong to the G-buffer: built with it, timed with
-            // it, and the same pass starts the image (`CompactPass::record`): no background and
-            // diffuse passes. Where no pass runs over the pixels, their list waits for a frame that
-            // keeps the G-buffer and needs it (`Targets::pixels_listed`).
-            let start =
-                if later { compact::Start::Later { pixels: over_pixels } } else { compact::Start::Here(diffuse) };
             ts.time(ctx, cmd, "gbuffer", || {
                 passes.gbuffer.record(ctx, cmd, targets, mesh, &vp, cull);
                 passes.compact.record(&rec, start)?;
@@ -557,8 +556,10 @@ impl Renderer {
         }
         let targets = self.views[slot].as_mut().expect("made above");
         targets.gbuffer_of = gbuffer_key;
-        if raster || relist {
-            targets.pixels_listed = !raster || !later || over_pixels;
+        if raster {
+            targets.pixels_listed = start.lists_pixels();
+        } else if relist {
+            targets.pixels_listed = true;
         }
         // A `mis` frame leaves `base` as it was.
         targets.base_of = if raster { None } else { base_key.or(base_of) };

@@ -71,6 +71,33 @@ impl Pipeline {
         Ok(p)
     }
 
+    /// Variants of one compute shader, [`Pipeline::compute`] each with its name and specialisation
+    /// constants; none is left when one fails.
+    pub fn compute_variants<const N: usize>(
+        ctx: &Context,
+        spv: &[u8],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        variants: [(&str, &[u32]); N],
+    ) -> Result<[Pipeline; N]> {
+        let mut made = Vec::with_capacity(N);
+        for (name, spec) in variants {
+            match Pipeline::compute(ctx, spv, name, bindings, push_size, spec) {
+                Ok(p) => made.push(p),
+                Err(e) => {
+                    for p in made {
+                        p.destroy(ctx);
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        match made.try_into() {
+            Ok(all) => Ok(all),
+            Err(_) => unreachable!("one pipeline a variant, made above"),
+        }
+    }
+
     /// [`Pipeline::compute`] through a device handle alone, unnamed: what a thread that compiles
     /// pipelines in the background calls (the caller names it with [`Pipeline::name`]).
     pub fn compute_on(
