@@ -381,6 +381,36 @@ fn energy_report_threads_yield_the_cpu_to_rendering() {
     assert_eq!(p, libc::SCHED_IDLE, "the worker's policy is {p}, SCHED_IDLE is {}", libc::SCHED_IDLE);
 }
 
+/// The editor does not wait for its energy report worker when it ends: the worker runs only on cores
+/// nothing else wants, and beside busy programs a `--quit` session whose frames took 0.9 s ended
+/// after 200 s, when they stopped. Here the worker is held inside its callback (as if never
+/// scheduled) while the `ReportWorker` is dropped: the drop must return (within 60 s, far more than
+/// dropping a channel takes; joining the worker would wait until it is let go).
+#[test]
+fn dropping_the_energy_report_worker_does_not_wait_for_it() {
+    use brdf_shop::editor::report::ReportWorker;
+    use std::sync::mpsc::channel;
+    use std::time::Duration;
+
+    let (entered_tx, entered) = channel();
+    let (release, released) = channel::<()>();
+    let released = std::sync::Mutex::new(released);
+    let mut worker = ReportWorker::new(move || {
+        let _ = entered_tx.send(());
+        let _ = released.lock().unwrap().recv();
+    });
+    worker.request(&Material::scratch_paper());
+    entered.recv_timeout(Duration::from_secs(120)).expect("the worker measured no report within 120 s");
+    let (dropped_tx, dropped) = channel();
+    std::thread::spawn(move || {
+        drop(worker);
+        let _ = dropped_tx.send(());
+    });
+    let result = dropped.recv_timeout(Duration::from_secs(60));
+    let _ = release.send(());
+    result.expect("dropping the worker waited for its thread");
+}
+
 /// Scripted drops (`--drop`): good files (a map, a mesh, a material) take effect, bad ones (a broken
 /// EXR, a missing OBJ, a truncated material) are one stderr line each and a status line, and the
 /// session goes on to write `--out` — the material dropped last, after the bad files.

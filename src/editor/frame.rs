@@ -11,7 +11,7 @@ use super::view::{Plan, Shown};
 use super::{graph, panel, report, App, FRAME_RATE_WINDOW, REFINE_MAX, REFINE_STEP};
 use crate::error::Result;
 use crate::render::compose::Placement;
-use crate::render::{Estimator, Progress, View};
+use crate::render::{Estimator, Progress, Recorded, View};
 
 /// What the mesh view was last rendered for: any change restarts it (an interaction frame).
 #[derive(Clone, Debug, PartialEq)]
@@ -227,14 +227,19 @@ impl App {
         let mesh_planned = plan.mesh.is_some();
         let canvas_planned = plan.canvas.is_some();
         let shown = gpu.frame(&plan)?;
+        let mut stood_in = false;
         let presented = match shown {
-            Shown::Presented { pixels, mesh_waiting } => {
-                // A mesh view that waited for its pipelines is rendered again when they are built.
+            Shown::Presented { pixels, mesh } => {
+                // A mesh view that waited for its pipelines is rendered again when they are built;
+                // one drawn with stand-ins is settled again then (as if previewed).
+                let mesh_waiting = mesh == Recorded::Waiting;
                 self.mesh_waiting = mesh_waiting;
                 if !mesh_waiting {
                     self.mesh_key = Some(mesh_key);
                     if mesh_planned {
-                        self.mesh_previewed = mesh_previewed;
+                        stood_in = mesh == Recorded::StandIn;
+                        self.mesh_stand_in = stood_in;
+                        self.mesh_previewed = mesh_previewed || stood_in;
                     }
                 }
                 if canvas_planned {
@@ -253,10 +258,18 @@ impl App {
             }
         };
         self.apply_panel(actions)?;
-        let kind = if presented && self.mesh_waiting { FrameKind::Waiting } else { kind };
+        let kind = match kind {
+            _ if presented && self.mesh_waiting => FrameKind::Waiting,
+            // Not the settled view yet: that is the settle frame after the build.
+            FrameKind::Settle if stood_in => FrameKind::StandIn,
+            k => k,
+        };
         // The frames that rendered the mesh view's `key` image at one scale time the preview's model.
         let waited = presented && self.mesh_waiting;
-        let sample = mesh_planned && !waited && one_scale && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
+        let sample = mesh_planned
+            && !waited
+            && one_scale
+            && matches!(kind, FrameKind::Interaction | FrameKind::Settle | FrameKind::StandIn);
         let scale = if mesh_planned { mesh_scale } else { canvas_scale };
         let refine_sample = kind == FrameKind::Refinement && !canvas_planned;
         let spp = if waited { 0 } else { mesh_spp };

@@ -92,11 +92,13 @@ impl ReportWorker {
 
 impl Drop for ReportWorker {
     fn drop(&mut self) {
-        // Closing the request channel ends the worker after the report it is measuring.
+        // Closing the request channel ends the worker after the report it is measuring; nobody
+        // waits for that. The worker runs only on cores nothing else wants: when other programs keep
+        // them busy, joining it held the editor's exit until they stopped (a `--quit` session beside
+        // two busy processes on 2 cores: 200 s, its frames 0.9 s). The thread holds no GPU object and
+        // writes nothing; it ends with its report, or with the process.
         self.requests = None;
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        drop(self.thread.take());
     }
 }
 

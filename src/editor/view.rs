@@ -43,9 +43,10 @@ pub struct Plan<'a> {
 
 /// What became of a frame.
 pub enum Shown {
-    /// Presented; the pixels when captured (`RGBA8`, the window's size), and whether the mesh view
-    /// waited for a lobe pipeline ([`Recorded::Waiting`]: it shows its last image).
-    Presented { pixels: Option<Vec<u8>>, mesh_waiting: bool },
+    /// Presented; the pixels when captured (`RGBA8`, the window's size), and what became of the mesh
+    /// view ([`Recorded::Waiting`]: it shows its last image; [`Recorded::StandIn`]: drawn with the
+    /// other choice's pipelines; `Done` also when it was not asked for).
+    Presented { pixels: Option<Vec<u8>>, mesh: Recorded },
     /// The swapchain no longer fits the window: nothing was drawn; ask for another frame.
     OutOfDate,
 }
@@ -239,7 +240,7 @@ impl Gpu {
         if !presented {
             self.drop_swapchain()?;
         }
-        Ok(Shown::Presented { pixels, mesh_waiting: mesh == Recorded::Waiting })
+        Ok(Shown::Presented { pixels, mesh })
     }
 
     /// Records the frame's GPU work after the swapchain image `index` was acquired.
@@ -256,7 +257,8 @@ impl Gpu {
         let window_image = self.window_image.as_ref().expect("made by frame");
         let (now, was) = (&plan.placement, self.composed.as_ref());
         let parts = Parts {
-            mesh: (plan.mesh.is_some() && mesh == Recorded::Done) || was.is_none_or(|p| p.mesh_scale != now.mesh_scale),
+            mesh: (plan.mesh.is_some() && mesh != Recorded::Waiting)
+                || was.is_none_or(|p| p.mesh_scale != now.mesh_scale),
             canvas: plan.canvas.is_some()
                 || was.is_none_or(|p| (p.canvas_scale, p.marker) != (now.canvas_scale, now.marker)),
             all: was.is_none_or(|p| (p.mesh, p.canvas) != (now.mesh, now.canvas)),

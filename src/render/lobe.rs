@@ -319,7 +319,7 @@ impl LobePass {
     }
 
     /// Takes in the pipelines the building threads have sent (the first error, after taking all).
-    fn collect(&mut self, ctx: &Context) -> Result<()> {
+    pub fn collect(&mut self, ctx: &Context) -> Result<()> {
         let mut failed = None;
         // Threads that have ended: each sent its pipeline (or, panicking, an error) before it ended.
         let ended: Vec<Variant> = self.building.iter().filter(|(_, t)| t.is_finished()).map(|(v, _)| *v).collect();

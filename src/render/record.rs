@@ -289,17 +289,22 @@ impl Renderer {
         // are drawn at different sizes, and a settle frame must not wait for a pipeline. It builds
         // them ahead (below), and a frame whose own choice is not built yet but whose other one is
         // draws with that one (the same material under the same lights, the softbox split off
-        // differently).
+        // differently): [`Recorded::StandIn`], not yet what a headless render draws.
         let mut chosen = choose(false);
         let mut other = match &self.build_in_background {
-            Some(_) if mesh_view => choose(true),
+            Some(_) if mesh_view && settings.estimator != Estimator::Mis => choose(true),
             _ => Vec::new(),
         };
+        let mut stand_in = false;
         if !other.is_empty() {
-            let pass = &self.passes.as_ref().expect("passes live until drop").lobe;
+            // What has been built since the last frame first (its callback may be what woke this one).
+            let pass = &mut self.passes.as_mut().expect("passes live until drop").lobe;
+            pass.collect(&self.ctx)?;
+            let pass = &*pass;
             let drawable = |set: &[(u32, lobe::Variant, Option<TileSet>)]| set.iter().all(|(_, v, _)| pass.drawable(v));
             if !drawable(&chosen) && drawable(&other) {
                 std::mem::swap(&mut chosen, &mut other);
+                stand_in = true;
             }
         }
         let mut tiles: Vec<(u32, TileSet)> = Vec::new();
@@ -308,11 +313,13 @@ impl Renderer {
             tiles.extend(t.map(|t| (i, t)));
             lobes.push((i, v));
         }
-        // The other choice's stand-ins (`Output::Any`, what `LobePass::ready` lets a frame draw with).
+        // The other choice's pipelines as `LobePass::ready` would ask for them: the stand-in of every
+        // output (`Output::Any`) of a variant whose output varies, a variant's own otherwise. (After
+        // a swap, the frame's own: a view drawn with stand-ins is drawn again once they are built.)
         let ahead: Vec<lobe::Variant> = other
             .into_iter()
-            .map(|(_, v, _)| v.any_output())
-            .filter(|v| v.outputs_vary() && lobes.iter().all(|(_, w)| w.any_output() != *v))
+            .map(|(_, v, _)| if v.outputs_vary() { v.any_output() } else { v })
+            .filter(|v| lobes.iter().all(|(_, w)| w != v && w.any_output() != *v))
             .collect();
         // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
@@ -564,6 +571,6 @@ impl Renderer {
         // A `mis` frame leaves `base` as it was.
         targets.base_of = if raster { None } else { base_key.or(base_of) };
         targets.drawn = true;
-        Ok(Recorded::Done)
+        Ok(if stand_in { Recorded::StandIn } else { Recorded::Done })
     }
 }
