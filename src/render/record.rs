@@ -300,7 +300,6 @@ impl Renderer {
             // What has been built since the last frame first (its callback may be what woke this one).
             let pass = &mut self.passes.as_mut().expect("passes live until drop").lobe;
             pass.collect(&self.ctx)?;
-            let pass = &*pass;
             let drawable = |set: &[(u32, lobe::Variant, Option<TileSet>)]| set.iter().all(|(_, v, _)| pass.drawable(v));
             if !drawable(&chosen) && drawable(&other) {
                 std::mem::swap(&mut chosen, &mut other);
