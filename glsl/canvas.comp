@@ -1,6 +1,6 @@
 #version 460
-// The canvas pass (SPEC §1): a unit sphere seen orthographically down −z, lit by a point light at
-// infinity: radiance f(L, ω_o) max(n·L, 0) I per pixel, ω_o = +z; alpha 1 on the sphere, 0 off it.
+// The canvas pass (docs/model.md, Frames and conventions): a unit sphere seen orthographically down −z, lit by a point
+// light at infinity: radiance f(L, ω_o) max(n·L, 0) I per pixel, ω_o = +z; alpha 1 on the sphere, 0 off it.
 #extension GL_GOOGLE_include_directive : require
 #include "pass.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;

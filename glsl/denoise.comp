@@ -1,5 +1,5 @@
 #version 460
-// The `key` estimator's filter of its rough lobes (issue 10; `render/denoise.rs`): their lobe passes
+// The `key` estimator's filter of its rough lobes (`render/denoise.rs`): their lobe passes
 // write into `rough` (rgb) with a sample set shifted per pixel, so each pixel's quadrature error is
 // its own, and mark each pixel they shade with its normal (alpha: `normal_tag`; 0, as cleared, where
 // they shade nothing). A lobe's outgoing radiance is smooth in the normal on the scale of its
@@ -12,7 +12,7 @@
 // written, unmarked ones as 0; 1: along y, `mid` → added into the accumulation image at the marked
 // pixels). An invocation takes a run of STRIP pixels along the pass's direction: it reads the
 // STRIP + 2R pixels under their windows once and decodes each normal once, where a pixel of its own
-// read and decoded 2R + 1 (session 15: 7 loads and 7 decodes a pixel a pass). The same sums, in the
+// would read and decode 2R + 1 (7 loads and 7 decodes a pixel a pass). The same sums, in the
 // same order. Pixels off the image are read clamped to its edge. The 49 taps of a (2R+1)² window,
 // each a load of the G-buffer and of the value, cost more than a lobe pass on llvmpipe (image loads
 // go lane by lane there).

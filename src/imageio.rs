@@ -1,5 +1,5 @@
-//! Image output (SPEC §1): EXR is the linear RGBA estimate, unclamped (alpha = coverage); PNG is the
-//! linear image times `exposure`, then the sRGB curve, clamped — for looking at, never for measuring.
+//! Image output (docs/model.md, Frames and conventions): EXR is the linear RGBA estimate, unclamped (alpha = coverage);
+//! PNG is the linear image times `exposure`, then the sRGB curve, clamped — for looking at, never for measuring.
 //! Both are written atomically: a failure leaves no half-written file.
 
 use std::path::Path;

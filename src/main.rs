@@ -1,4 +1,4 @@
-//! The `brdf-shop` binary: parses the command line (SPEC §4) and turns every error into one line on
+//! The `brdf-shop` binary: parses the command line (README, Commands) and turns every error into one line on
 //! stderr with exit status 1 (the user's input) or 2 (internal or device), never a panic.
 
 // `!(x > 0.0)` is how this code says "not a positive number, NaN included"; the lint would

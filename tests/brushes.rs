@@ -1,4 +1,5 @@
-//! Brush behaviour measured on the canvas image computed on the CPU (SPEC §1–2, paper §3.3).
+//! Brush behaviour measured on the canvas image computed on the CPU (docs/model.md, Frames and conventions and The
+//! paper model; paper §3.3).
 
 use brdf_shop::brdf::{Material, ALPHA_MAX, ALPHA_MIN};
 use brdf_shop::brush::brushes::{self, eq3_alpha, ModifyRule, Settings};

@@ -153,9 +153,9 @@ fn idle_frames_refine_the_mesh_view() {
             assert_eq!(f["spp"], 16, "{f}");
             // The timestamps time the passes they bracket: 16 `mis` samples a pixel over the
             // sphere measure 100x the compose pass (one read and write a window pixel; 98-295 ms
-            // against 0.9-6 ms, release build). Until session 11 lavapipe read a compute pass's
-            // first timestamp only when the next pass flushed its rasteriser, after the pass had
-            // run, and these `mis` passes read 0.03-0.66 ms against a compose of 0.9-1.8 ms.
+            // against 0.9-6 ms, release build). A first timestamp written only when the next pass
+            // flushes the rasteriser, after the pass has run, reads these `mis` passes as 0.03-0.66 ms
+            // against a compose of 0.9-1.8 ms: this catches a timestamp that does not bracket its pass.
             assert!(ms("mis") > ms("compose"), "the mis pass timed below the compose pass: {f}");
         } else if f["kind"] == "waiting" {
             // The mesh view waits for its lobe pipelines, built off the UI thread: nothing of it.
@@ -353,8 +353,8 @@ fn energy_report_is_measured_off_the_ui_thread() {
 }
 
 /// The report's worker runs in the idle scheduling class: on lavapipe the GPU is the CPU, and a
-/// report measured at normal priority beside the frames took half the cores (session 13:
-/// interaction frames 1.9× slower). `on_done` runs on the worker thread, so it reads the class there.
+/// report measured at normal priority beside the frames takes half the cores (2-core
+/// lavapipe: interaction frames 1.9× slower). `on_done` runs on the worker thread, so it reads the class there.
 #[cfg(target_os = "linux")]
 #[test]
 fn energy_report_threads_yield_the_cpu_to_rendering() {
@@ -514,7 +514,7 @@ fn minimise_without_a_window_manager_is_one_line_and_the_session_goes_on() {
     assert_eq!(image::open(d("shot.png")).unwrap().to_rgba8().dimensions(), (200, 120));
 }
 
-/// The window shows what the headless renderer renders (issue 11): the screenshot's mesh view and
+/// The window shows what the headless renderer renders: the screenshot's mesh view and
 /// canvas equal `render` of the same views — size, camera, exposure and canvas light read from
 /// `--frame-stats`'s `views` — within 1 level of 255 per channel. Both run the same passes with the
 /// same frame seed; what may differ is the sRGB encoding (the compose pass in f32 and the PNG writer

@@ -1,5 +1,5 @@
-//! The environment map (SPEC §1) on the CPU: loading the real maps and refusing bad files, the texel
-//! policy and its report, the equirect mapping, bilinear lookup across the `u` seam, the mip chain,
+//! The environment map (docs/model.md, Frames and conventions) on the CPU: loading the real maps and refusing bad
+//! files, the texel policy and its report, the equirect mapping, bilinear lookup across the `u` seam, the mip chain,
 //! SH9 irradiance, the brightest direction and the sampling distribution.
 
 use std::f64::consts::PI;
@@ -38,8 +38,8 @@ fn every_real_map_loads_with_its_report() {
             s.negative,
             100.0 * s.negative_energy_fraction
         );
-        // SPEC §1: the lossy maps carry up to 10 % negative energy; 15 % leaves room for the
-        // solid-angle weighting of this count.
+        // docs/model.md, Frames and conventions: the lossy maps carry up to 10 % negative energy; 15 % leaves room for
+        // the solid-angle weighting of this count.
         assert!((0.0..0.15).contains(&s.negative_energy_fraction), "{name}: {}", s.negative_energy_fraction);
         any_negative |= s.negative > 0;
         assert!(e.texels.iter().flatten().all(|v| v.is_finite()));
@@ -138,7 +138,7 @@ fn non_finite_texels_become_zero_and_negatives_stay() {
 
 #[test]
 fn equirect_mapping_follows_spec() {
-    // SPEC §1: u = 0 looks down −z, u = 0.25 down +x, v = 0 is +y.
+    // docs/model.md, Frames and conventions: u = 0 looks down −z, u = 0.25 down +x, v = 0 is +y.
     let (u, v) = Environment::uv(DVec3::new(0.0, 0.0, -1.0));
     assert!(u.abs() < 1e-12 && (v - 0.5).abs() < 1e-12);
     let (u, _) = Environment::uv(DVec3::X);

@@ -286,8 +286,8 @@ fn brdf_explorer_export_loads_compiles_and_evaluates_what_eval_does() {
     let dir = tempfile::tempdir().unwrap();
     let ctx = device();
     let pairs = pairs();
-    // BRDF(L, V, N, X, Y) in a tilted world frame: N off every axis, X and Y from SPEC §1's rule
-    // (BRDF Explorer's own tangent), the local pairs rotated into it.
+    // BRDF(L, V, N, X, Y) in a tilted world frame: N off every axis, X and Y from the rule of docs/model.md, Frames and
+    // conventions (BRDF Explorer's own tangent), the local pairs rotated into it.
     let call = "BRDF(wi.x * X + wi.y * Y + wi.z * N, wo.x * X + wo.y * Y + wo.z * N, N, X, Y)";
     let frame = "const vec3 N = normalize(vec3(0.3, 0.8, 0.52));
 const vec3 X = normalize(cross(vec3(0.0, 1.0, 0.0), N));

@@ -1,4 +1,4 @@
-//! Property-based fuzzing of every parser that reads user input (issue 13): the material and
+//! Property-based fuzzing of every parser that reads user input: the material and
 //! strokes files, the EXR and HDR loaders, the OBJ, PLY and glTF loaders, and `eval`'s line reader.
 //! Nightly `cargo fuzz` is not part of the toolchain here, so `proptest` drives them: each target
 //! starts from a valid input made on the spot and applies 1–16 random mutations (byte flips,
@@ -8,8 +8,8 @@
 //!
 //! Case counts are bounded so the whole file runs in well under a minute in the test profile
 //! (`CASES` per target); the seed is fixed (13) so CI is reproducible, and `PROPTEST_RNG_SEED=N`
-//! with `BRDF_SHOP_FUZZ_CASES=N` explores other and more inputs. Inputs that ever crashed a parser are kept in `tests/corpus/` and replayed
-//! by [`corpus_regressions`].
+//! with `BRDF_SHOP_FUZZ_CASES=N` explores other and more inputs. Inputs that ever crashed a parser are kept in
+//! `tests/corpus/` and replayed by [`corpus_regressions`].
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};

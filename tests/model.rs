@@ -1,4 +1,5 @@
-//! The model's numerics and the energy/reciprocity facts of SPEC §2, through the library.
+//! The model's numerics and the energy/reciprocity facts of docs/model.md, The paper model and The reciprocal model,
+//! through the library.
 
 use std::f64::consts::PI;
 

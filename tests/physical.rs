@@ -1,4 +1,4 @@
-//! Issue 9: every material the brushes produce in the default (reciprocal) model is exactly
+//! Every material the brushes produce in the default (reciprocal) model is exactly
 //! reciprocal and energy-bounded, with the pieces of the bound's proof checked on their own: the
 //! facet distribution integrates to 1 over solid angle, and every sample's weight `F cos θ_i / p` is
 //! at most 1. Plus stiff inputs (no NaN/Inf, f32 within its bound of f64) and `check` through the

@@ -1,4 +1,4 @@
-// The BRDF model of SPEC §2 and the README's contract changelog in f32: Ward lobes in both paper
+// The BRDF model (docs/model.md, The paper model and The reciprocal model) in f32: Ward lobes in both paper
 // normalisations (evaluated in log space so that no inf·0 appears), rotated and split lobes,
 // symmetrisation, the reciprocal facet form, Walter's pdf and Ward's half-vector sampling, and the
 // one-sample mixture sampler of `src/brdf/sampling.rs`.
@@ -30,7 +30,7 @@ bool brdf_symmetrize();
 
 const float LN_MAX = 88.0;
 
-// ln W(a, b) of SPEC §2 for unit a, b in the local frame; -inf where a.z ≤ 0 or b.z ≤ 0.
+// ln W(a, b) (docs/model.md, The paper model) for unit a, b in the local frame; -inf where a.z ≤ 0 or b.z ≤ 0.
 float ward_ln(bool gm, vec4 shape, vec3 a, vec3 b) {
     if (!(a.z > 0.0 && b.z > 0.0)) return -1.0 / 0.0;
     vec3 h = a + b;
@@ -51,7 +51,7 @@ float ward_ln(bool gm, vec4 shape, vec3 a, vec3 b) {
 
 float ward(bool gm, vec4 shape, vec3 a, vec3 b) { return exp(min(ward_ln(gm, shape, a, b), LN_MAX)); }
 
-// ln F of the reciprocal facet lobe (README changelog) from h = wi + wo in the facet frame and
+// ln F of the reciprocal facet lobe (docs/model.md, The reciprocal model) from h = wi + wo in the facet frame and
 // max(wi.z, wo.z): exp(−[(s/αx)² + (t/αy)²]) (1 + s² + t²) / (2π αx αy h_z max_z); -inf where h_z ≤ 0.
 float facet_ln(vec4 shape, vec3 h, float max_z) {
     if (!(h.z > 0.0 && max_z > 0.0)) return -1.0 / 0.0;
@@ -74,7 +74,7 @@ float facet_lobe(GpuLobe l, vec3 wi, vec3 wo) {
     return f;
 }
 
-// F_k(wi, wo) per unit albedo (SPEC §2), one way, for a lobe in hand and the material's form.
+// F_k(wi, wo) per unit albedo (docs/model.md, The paper model), one way, for a lobe in hand and the material's form.
 float lobe_one_way_of(GpuLobe l, uint form, vec3 wi, vec3 wo) {
     if (form == 2u) return facet_lobe(l, wi, wo);
     bool gm = form == 1u;
@@ -85,7 +85,7 @@ float lobe_one_way_of(GpuLobe l, uint form, vec3 wi, vec3 wo) {
     return f;
 }
 
-// F_k(wi, wo) per unit albedo (SPEC §2), one way.
+// F_k(wi, wo) per unit albedo (docs/model.md, The paper model), one way.
 float lobe_one_way(uint k, vec3 wi, vec3 wo) { return lobe_one_way_of(brdf_lobe(k), brdf_form(), wi, wo); }
 
 // One lobe's term of f per unit albedo, symmetrised when `sym`; 0 below the horizon.
@@ -96,7 +96,7 @@ float lobe_value(GpuLobe l, uint form, bool sym, vec3 wi, vec3 wo) {
     return t;
 }
 
-// f(wi, wo) of SPEC §2 (symmetrised when the material says so); 0 below the horizon.
+// f(wi, wo) (docs/model.md, The paper model; symmetrised when the material says so); 0 below the horizon.
 vec3 material_eval(vec3 wi, vec3 wo) {
     if (!(wi.z > 0.0 && wo.z > 0.0)) return vec3(0.0);
     vec3 f = brdf_diffuse().rgb / PI;

@@ -1,10 +1,12 @@
-// Shared by every pass: constants, quaternions, the SPEC §1 shading frame and equirect mapping.
+// Shared by every pass: constants, quaternions, the shading frame and equirect mapping of docs/model.md, Frames and
+// conventions.
 #ifndef COMMON_GLSL
 #define COMMON_GLSL
 
 #include "math.glsl"
 
-// SPEC §1: t = normalize(Y × n), or (1,0,0) made orthogonal to n where |Y × n| < 1e-6; b = n × t.
+// docs/model.md, Frames and conventions: t = normalize(Y × n), or (1,0,0) made orthogonal to n where |Y × n| < 1e-6; b
+// = n × t.
 struct Frame { vec3 t; vec3 b; vec3 n; };
 
 Frame frame_from_normal(vec3 n) {
@@ -16,7 +18,7 @@ Frame frame_from_normal(vec3 n) {
 vec3 to_local(Frame f, vec3 v) { return vec3(dot(v, f.t), dot(v, f.b), dot(v, f.n)); }
 vec3 to_world(Frame f, vec3 v) { return v.x * f.t + v.y * f.b + v.z * f.n; }
 
-// SPEC §1 equirect mapping: u = fract(atan2(d.x, −d.z) / 2π), v = acos(d.y) / π.
+// Equirect mapping (docs/model.md, Frames and conventions): u = fract(atan2(d.x, −d.z) / 2π), v = acos(d.y) / π.
 vec2 equirect_uv(vec3 d) {
     float u = atan(d.x, -d.z) / (2.0 * PI);
     return vec2(fract(u), acos(clamp(d.y, -1.0, 1.0)) / PI);

@@ -7,9 +7,9 @@
 // is the same for the whole dispatch (a push constant); an early `return` only masks what follows.
 // (Some operations cost less under a mask: image, texel and storage-buffer accesses go lane by
 // lane there and skip masked lanes.) Code a dispatch does not need must go by a specialisation
-// constant (lobe.comp's OUTPUT, session 23) or by dispatching over a list of the pixels that need
+// constant (lobe.comp's OUTPUT) or by dispatching over a list of the pixels that need
 // it (compact.comp). A loop is the one real branch: its body always runs once, and it goes round
-// again while any lane is still active (session 13: a 64-round loop under a condition false
+// again while any lane is still active (2-core lavapipe: a 64-round loop under a condition false
 // everywhere cost 1.6 ms at 512² against 68 ms when taken: one masked round). So a `for (i < n)`
 // loop costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here
 // are do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2
@@ -31,7 +31,7 @@ layout(push_constant) uniform Push {
     vec4 light;    // canvas light direction, intensity | each light's end in the light set (lobe, tiles)
 } pc;
 
-// The primary ray through the centre of pixel p (SPEC §1 mesh camera).
+// The primary ray through the centre of pixel p (the mesh camera, docs/model.md, Frames and conventions).
 vec3 camera_ray(ivec2 p) {
     vec2 ndc = (vec2(p) + 0.5) / vec2(pc.size.xy) * 2.0 - 1.0;
     return normalize(pc.forward.xyz + ndc.x * pc.right.xyz - ndc.y * pc.up.xyz);
@@ -42,7 +42,7 @@ bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
 // Whether a G-buffer texel N (the normal, alpha 1 marking the object) holds the mesh facing the
 // eye, with its shading frame and ω_o (local): the pixels `compact.comp` lists and the mesh passes
 // shade. ω_o is the reverse of the pixel's camera ray, on which the surface point lies (the
-// G-buffer keeps no position: session 21, one image load a pixel instead of two, and about 5 ms
+// G-buffer keeps no position: one image load a pixel instead of two, and about 5 ms
 // less rasterising at 512² on llvmpipe).
 bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
     f = frame_from_normal(normalize(N.xyz));

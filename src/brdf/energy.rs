@@ -1,4 +1,4 @@
-//! Energy and reciprocity measurements of a material (SPEC §2 "Energy"): directional albedo
+//! Energy and reciprocity measurements of a material (docs/model.md, The energy bound): directional albedo
 //! `a(ω_o) = ∫ f(ω_i, ω_o) cos θ_i dω_i` by importance-sampled Monte Carlo with a standard error, its
 //! maximum over a dense set of view directions (up to 89.9°), and the reciprocity error
 //! `max |f(a,b) − f(b,a)| / max f` over random pairs.

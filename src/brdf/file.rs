@@ -1,5 +1,5 @@
-//! The material file of SPEC §3 (`*.brdf.json`): parsing with every refusal naming the field and the
-//! reason, validation (ranges, unit quaternions, the energy bound), and serialisation.
+//! The material file (`*.brdf.json`, docs/formats.md, Material file): parsing with every refusal naming the field and
+//! the reason, validation (ranges, unit quaternions, the energy bound), and serialisation.
 //!
 //! Unknown fields are refused. Version 2 (what this program writes) adds `"model"`: `"reciprocal"`
 //! (the default: the reciprocal, energy-bounded facet lobes; `rotation` is the facet frame `Q`,

@@ -1,5 +1,6 @@
-//! The BRDF model of SPEC §2: the extended multi-lobe Ward material of the paper (eq. 1–2), its
-//! sampling, its energy and reciprocity measurements, and the material file of SPEC §3.
+//! The BRDF model (docs/model.md, The paper model and The reciprocal model): the extended multi-lobe
+//! Ward material of the paper (eq. 1–2), its sampling, its energy and reciprocity measurements, and
+//! the material file (docs/formats.md, Material file).
 //!
 //! Plain Rust: nothing here may import `ash` or anything of the renderer; the renderer and the editor
 //! depend on this module, never the reverse.

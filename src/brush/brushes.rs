@@ -1,5 +1,5 @@
-//! The five brushes of SPEC §2 / paper §3.1, §3.3: create, modify, streak, intensify, de-intensify.
-//! Each takes a material and a canvas point and returns the changed material or says why it cannot
+//! The five brushes (docs/model.md, The paper model; paper §3.1, §3.3): create, modify, streak, intensify,
+//! de-intensify. Each takes a material and a canvas point and returns the changed material or says why it cannot
 //! act there. Every brush keeps the energy bound `ρ_d + Σρ_k ≤ 1` per channel.
 //!
 //! Owns the mapping from strokes to lobe parameters; the canvas geometry is `canvas.rs`.
@@ -117,8 +117,8 @@ fn make_room(m: &mut Material, keep: Option<usize>, want: [f64; 3]) -> [f64; 3] 
     got
 }
 
-/// Create: a new sharp lobe whose highlight peaks exactly at `p` (SPEC §2, paper §3.3.1). Returns
-/// the new lobe's index.
+/// Create: a new sharp lobe whose highlight peaks exactly at `p` (docs/model.md, The paper model; paper §3.3.1).
+/// Returns the new lobe's index.
 pub fn create(m: &Material, s: &Settings, p: (f64, f64)) -> Result<(Material, usize)> {
     if m.lobes.len() >= crate::brdf::material::MAX_LOBES {
         return Err(Error::Brush(format!(
@@ -202,7 +202,8 @@ fn check_lobe(m: &Material, k: usize) -> Result<()> {
     Ok(())
 }
 
-/// Modify: sets `αx = αy = α` from the brush's distance to the highlight (SPEC §2, paper §3.3.3).
+/// Modify: sets `αx = αy = α` from the brush's distance to the highlight (docs/model.md, The paper model; paper
+/// §3.3.3).
 pub fn modify(m: &Material, s: &Settings, k: usize, p: (f64, f64)) -> Result<Material> {
     check_lobe(m, k)?;
     let site = lit_site(&s.canvas, p)?;
@@ -248,7 +249,7 @@ pub fn eq3_alpha(rule: ModifyRule, c: f64, gamma: f64) -> f64 {
 }
 
 /// Streak: turns the tangent angle so `x̂` points from the highlight toward the brush, and sets `αx`
-/// alone so the brush position sits at `γ` of the peak (SPEC §2, paper §3.3.4).
+/// alone so the brush position sits at `γ` of the peak (docs/model.md, The paper model; paper §3.3.4).
 pub fn streak(m: &Material, s: &Settings, k: usize, p: (f64, f64)) -> Result<Material> {
     check_lobe(m, k)?;
     let site = lit_site(&s.canvas, p)?;

@@ -1,5 +1,5 @@
-//! The spherical canvas of SPEC §1: a unit sphere seen orthographically down `−z`, lit by one point
-//! light at infinity. Maps normalised canvas coordinates to surface points and local shading frames,
+//! The spherical canvas (docs/model.md, Frames and conventions): a unit sphere seen orthographically down `−z`, lit by
+//! one point light at infinity. Maps normalised canvas coordinates to surface points and local shading frames,
 //! and computes the canvas radiance of a material, of one lobe, and whole canvas images on the CPU.
 //!
 //! Owns canvas geometry only; what a stroke does to a material lives in `brushes.rs`.
@@ -12,7 +12,8 @@ use crate::brdf::Material;
 /// The canvas viewer's direction: every canvas pixel is seen from `+z`.
 pub const VIEW: DVec3 = DVec3::Z;
 
-/// The local shading frame of SPEC §1: `z = n`, `x = t = normalize(Y × n)` (or `(1,0,0)` where
+/// The local shading frame (docs/model.md, Frames and conventions): `z = n`, `x = t = normalize(Y × n)` (or `(1,0,0)`
+/// where
 /// `|Y × n| < 1e-6`, made orthogonal to `n`), `y = n × t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {

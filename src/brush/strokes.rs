@@ -1,5 +1,5 @@
-//! The strokes file of SPEC §3 (`*.strokes.json`) and its replay: a canvas setup and a list of strokes
-//! in normalised canvas coordinates, applied in order through the same brush functions the editor
+//! The strokes file (`*.strokes.json`, docs/formats.md, Strokes file) and its replay: a canvas setup and a list of
+//! strokes in normalised canvas coordinates, applied in order through the same brush functions the editor
 //! uses. Replay is sequential `f64` arithmetic, so it yields the same material bit for bit every run.
 
 use std::path::Path;

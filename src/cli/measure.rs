@@ -1,4 +1,4 @@
-//! `brdf-shop bench` and `brdf-shop report {error-vs-time, stability}` (issue: measurements): thin
+//! `brdf-shop bench` and `brdf-shop report {error-vs-time, stability}`: thin
 //! front ends over `brdf_shop::measure`, each with a `--quick` setting the tests run.
 
 use std::path::Path;

@@ -1,4 +1,4 @@
-//! Command-line front end (SPEC §4). Each subcommand lives in its own file; this one parses flags and
+//! Command-line front end (README, Commands). Each subcommand lives in its own file; this one parses flags and
 //! dispatches. Library errors carry the file and field; `anyhow` adds context only here.
 
 mod check;

@@ -1,4 +1,4 @@
-//! `brdf-shop render`: one headless GPU frame (SPEC §4) written as EXR or PNG, with `--timings`.
+//! `brdf-shop render`: one headless GPU frame (README, Commands) written as EXR or PNG, with `--timings`.
 
 use brdf_shop::render::{Estimator, Renderer, View};
 use brdf_shop::vk::Context;

@@ -1,5 +1,5 @@
-//! The flags `render` and `reference` share (SPEC §4) and what they load: material, environment,
-//! mesh, camera, canvas light, image size and sample count. Every refusal names the flag or file.
+//! The flags `render` and `reference` share (README, Commands) and what they load: material,
+//! environment, mesh, camera, canvas light, image size and sample count. Every refusal names the flag or file.
 
 use std::path::{Path, PathBuf};
 
@@ -18,7 +18,7 @@ pub enum ViewArg {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EstimatorArg {
-    /// Key lights split off the map (light + BRDF sampling) and the residual prefiltered (issue 10).
+    /// Key lights split off the map (light + BRDF sampling) and the residual prefiltered: the default.
     Key,
     /// The paper's filtered importance sampling.
     Fis,
@@ -198,8 +198,8 @@ pub fn load_env(path: &Path) -> anyhow::Result<Environment> {
     Ok(Environment::load(path)?)
 }
 
-/// What the loader changed or kept (SPEC §1), printed once the command succeeded (a refusal stays
-/// one line).
+/// What the loader changed or kept (docs/model.md, Frames and conventions), printed once the command succeeded (a
+/// refusal stays one line).
 pub fn report_env(scene: &Scene) {
     if let Some(env) = &scene.env {
         let s = &env.stats;

@@ -1,5 +1,5 @@
-//! The energy report of the editor's material, computed off the UI thread (issue 11: "nothing slow
-//! on the UI thread"). A stroke or slider edit asks for a new report and goes on at once; one worker
+//! The energy report of the editor's material, computed off the UI thread (nothing slow runs on
+//! the UI thread). A stroke or slider edit asks for a new report and goes on at once; one worker
 //! thread measures the newest material asked for (older requests still queued are skipped), and the
 //! panel shows the newest finished report, marked as updating while it is not the current
 //! material's. No window or GPU here: `on_done` (the editor passes a redraw request) is how the
@@ -7,9 +7,9 @@
 //!
 //! The worker and its thread pool run in the idle scheduling class ([`yield_to_rendering`]): on
 //! lavapipe the GPU is these same CPU cores, and a report measured beside a frame took half of
-//! them (session 13: the interaction frames' passes ran 1.9× slower while a report was measured;
-//! frame medians 432–452 → 221–244 ms at 1280×720). Idle, the report waits for
-//! the frames: while strokes keep both cores busy it is marked as updating, and it finishes in the
+//! them (2-core lavapipe, 1280×720: the interaction frames' passes run 1.9× slower while a report is
+//! measured at normal priority, frame medians 432–452 ms against 221–244 ms in the idle class). Idle, the report waits
+//! for the frames: while strokes keep both cores busy it is marked as updating, and it finishes in the
 //! first idle moment. On a machine whose GPU is not its CPU nothing changes.
 
 use std::sync::mpsc::{channel, Receiver, Sender};

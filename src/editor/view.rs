@@ -47,7 +47,7 @@ pub enum Shown {
     /// view ([`Recorded::Waiting`]: it shows its last image; [`Recorded::StandIn`]: drawn with the
     /// other choice's pipelines; `Done` also when it was not asked for).
     Presented { pixels: Option<Vec<u8>>, mesh: Recorded },
-    /// The swapchain no longer fits the window: nothing was drawn; ask for another frame.
+    /// The swapchain does not fit the window: nothing was drawn; ask for another frame.
     OutOfDate,
 }
 
@@ -182,7 +182,7 @@ impl Gpu {
         }
         self.renderer.begin_frame(plan.material)?;
         let number = self.renderer.frame_number();
-        // Textures freed before a frame FRAMES_IN_FLIGHT back are no longer drawn by any frame in flight.
+        // Textures freed before a frame FRAMES_IN_FLIGHT back are not drawn by any frame in flight.
         while self.retired.front().is_some_and(|r| r.0 + (FRAMES_IN_FLIGHT as u64) < number) {
             let (_, ids) = self.retired.pop_front().expect("checked");
             if let Some(ui) = self.ui.as_mut() {

@@ -75,8 +75,8 @@ fn describe(m: &Material) -> String {
 /// Entry points both GLSL formats add after the model: world-space vectors in any tangent frame.
 const ENTRY: &str = "
 // f(L, V) for unit world-space vectors: L toward the light, V toward the viewer, N the shading normal,
-// X the tangent and Y = N × X (SPEC §1: X = normalize(cross(vec3(0,1,0), N)), or (1,0,0) made
-// orthogonal to N where that cross product is shorter than 1e-6).
+// X the tangent and Y = N × X (docs/model.md, Frames and conventions: X = normalize(cross(vec3(0,1,0), N)), or (1,0,0)
+// made orthogonal to N where that cross product is shorter than 1e-6).
 vec3 brdf_shop_eval(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {
     return material_eval(vec3(dot(L, X), dot(L, Y), dot(L, N)), vec3(dot(V, X), dot(V, Y), dot(V, N)));
 }

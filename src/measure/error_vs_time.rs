@@ -1,7 +1,7 @@
 //! `report error-vs-time`: for scenes (environment × material) and sample counts, each estimator's
 //! GPU time (timestamps, median of repeated frames taken in rounds that interleave a scene's
 //! estimators and sample counts; the shading passes, without the G-buffer and background that every
-//! estimator shares: the sweep's frames rasterise, so since session 22 their `gbuffer` pass also
+//! estimator shares: the sweep's frames rasterise, so their `gbuffer` pass also
 //! draws the background, and it would draw a diffuse term, which the sweep's materials do not have)
 //! and its error against the converged CPU reference
 //! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
@@ -360,10 +360,10 @@ fn scenes(rows: &[Row]) -> Vec<String> {
     scenes
 }
 
-/// Issue 10's error target for the default estimator at `fis`-8's GPU time.
+/// The frontier goal's error target for the default estimator at `fis`-8's GPU time: 8 % relative L1.
 pub const GOAL_ERROR: f64 = 0.08;
 
-/// Issue 10's goal over the scenes of `rows`: how many have `key`'s error at `fis`-8's GPU time
+/// The frontier goal over the scenes of `rows`: how many have `key`'s error at `fis`-8's GPU time
 /// ([`error_at`], as the summary's table) within [`GOAL_ERROR`], each configuration's time read by
 /// `time` (its median frame, or its fastest: the frames' noise decides scenes within a tenth of a
 /// millisecond); and how many scenes there are.
@@ -457,7 +457,7 @@ pub fn summary(
     let (by_median, n) = goal_count(rows, |r| r.ms_median);
     let (by_fastest, _) = goal_count(rows, |r| r.ms_min);
     s.push_str(&format!(
-        "\n**Issue 10's goal, `key` within {:.0} % at `fis`-8's GPU time: {by_median} of {n} scenes** by the medians above; {by_fastest} of {n} with each configuration's fastest frame instead.\n",
+        "\n**The frontier goal, `key` within {:.0} % at `fis`-8's GPU time: {by_median} of {n} scenes** by the medians above; {by_fastest} of {n} with each configuration's fastest frame instead.\n",
         GOAL_ERROR * 100.0
     ));
     s.push_str(&match fixed {

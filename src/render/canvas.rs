@@ -1,5 +1,5 @@
-//! The canvas pass (SPEC §1): the material on the point-lit unit sphere, written to the whole
-//! accumulation image (alpha 1 on the sphere). The only pass of a canvas view.
+//! The canvas pass (docs/model.md, Frames and conventions): the material on the point-lit unit sphere, written to the
+//! whole accumulation image (alpha 1 on the sphere). The only pass of a canvas view.
 
 use ash::vk;
 

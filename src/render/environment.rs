@@ -18,7 +18,7 @@ use crate::Result;
 
 /// How the `key` estimator's lobe passes read the residual's mip chain: bilinear within the nearest
 /// level, not between two. Their lod is already the sample's own footprint (`lobe::KEY_LOD_BIAS`),
-/// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost. Measured (session 13,
+/// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost. Measured (2-core
 /// lavapipe): `assets/bench-4lobes.brdf.json`'s `key` lobe passes 237 → 206 ms at 512² (median of
 /// 9 interleaved runs); on the 64² sweep the error at 8 spp rose by 0–9 % of itself (city
 /// anisotropic 0.070 → 0.076, the filtered rough lobes unchanged), at 1 spp by up to 50 % on the
@@ -98,7 +98,7 @@ pub enum TileLights {
 /// How many lobes' tiles a map keeps (`GpuKeyLights::tiles`; all are dropped when it is full).
 const TILES_KEPT: usize = 1024;
 
-/// The key lights of a map on the GPU (issue 10's estimator): the residual map (lights replaced by
+/// The key lights of a map on the GPU (the `key` estimator): the residual map (lights replaced by
 /// their local background) with its mip chain and SH, and the lights' cones. Absent when the map has
 /// no key light.
 pub struct GpuKeyLights {

@@ -83,18 +83,19 @@ pub struct Variant {
 /// A specialisation constant because llvmpipe (Mesa 22.3, `lp_bld_nir_soa.c` `if_cond`) compiles an
 /// `if` to an execution mask and no branch: both sides run for every vector, whatever its lanes
 /// take, even where the condition is the same for the whole dispatch. Only a loop is a real branch
-/// (it goes round again while a lane is active). As push constants, the other outputs' code ran
-/// masked in every pass: the sparse passes ran the light term of all four pixels of a block even
-/// where they took it once a block, and the dense tail as well. Session 23, 512², the bench's goal
-/// scene (`assets/bench-4lobes.brdf.json` on studio, `key` 8 spp; three rounds of alternating
-/// binaries, medians of 7 frames): the three lobes that take their light term once a block
-/// 4.6–5.4 → 4.0–4.6, 6.5–7.3 → 5.5–5.8 and 6.1–6.9 → 5.5–6.0 ms; the same images bit for bit.
+/// (it goes round again while a lane is active). As push constants, the other outputs' code would run
+/// masked in every pass: the sparse passes would run the light term of all four pixels of a block
+/// even where they take it once a block, and the dense tail as well. Measured on 2-core lavapipe at
+/// 512², the bench's goal scene (`assets/bench-4lobes.brdf.json` on studio, `key` 8 spp; three rounds of alternating
+/// binaries, medians of 7 frames), push constants against specialisation constants: the three
+/// lobes that take their light term once a block 4.6–5.4 → 4.0–4.6, 6.5–7.3 → 5.5–5.8 and 6.1–6.9 → 5.5–6.0 ms; the
+/// same images bit for bit.
 ///
 /// `Any` holds the code of every output and takes the one the push constants say: the editor's
 /// stand-in while a view's own pipeline is built ([`LobePass::ready`]). Which outputs a lobe takes
 /// depends on the view's size (`denoise::min_alpha`, `denoise::pixel_lights`), so a settle frame at
-/// full size after previews at a smaller one would otherwise wait for new pipelines; `Any` is the
-/// one pipeline a lobe needed before session 23, and draws the same image.
+/// full size after previews at a smaller one would otherwise wait for new pipelines; `Any` draws the
+/// same image as each specialised pipeline.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Output {
     #[default]
@@ -242,7 +243,7 @@ pub enum Into {
     /// `Targets::rough` (cleared to unmarked zeros before the frame's first such pass), for the
     /// filter (`denoise`), with the set shifted per pixel: up to `lobe.comp`'s `FEW_SAMPLES` (4)
     /// stratified over the filter's window (`strata`), else by a hash per pixel (`strata` false:
-    /// always by the hash, as before session 17; a test compares).
+    /// always by the hash; a test compares the two).
     Rough { strata: bool },
     /// `Targets::cells`, one sample set per 2 × 2 block, its light term with it (`denoise::sparse`):
     /// the pass runs over the blocks' list, at their first shaded pixel, the shifts stratified over

@@ -464,7 +464,7 @@ impl Renderer {
             })?;
         }
         // A frame that keeps a G-buffer whose pixels are not listed lists them, in the pass that
-        // starts the image as the background and diffuse passes would (bit for bit, session 22).
+        // starts the image as the background and diffuse passes would (bit for bit; a test compares).
         let relist = !raster && !targets.pixels_listed;
         // A frame that keeps the G-buffer starts from the image the background and diffuse passes
         // left the frame before (`Targets::base`): while painting only the lobes change.

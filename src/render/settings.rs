@@ -17,7 +17,7 @@ pub enum Estimator {
     Plain,
     /// Environment and BRDF sampling combined by the balance heuristic, diffuse included.
     Mis,
-    /// Issue 10's default: the map's key lights split off; each lobe pass integrates the residual map
+    /// The default: the map's key lights split off; each lobe pass integrates the residual map
     /// (prefiltered, a Hammersley set shifted per frame, lod bias [`lobe::KEY_LOD_BIAS`]) and the lobe
     /// under the lights (light and BRDF samples, balance heuristic, or the quadrature points of the
     /// lights or of their tiles for a lobe wider than those); the diffuse pass takes the residual's SH9
@@ -79,8 +79,8 @@ pub enum View {
 /// The most samples per pixel (per lobe for `fis`/`plain`, per pixel for `mis`) a frame takes. The
 /// sample tables are uploaded whole (16 bytes a sample for the lobe passes, 32 for `mis`, rounded
 /// up to a power of two) and `mis` records one dispatch per 32 samples: 65536 keeps the table at
-/// 2 MiB and a frame at 2048 dispatches, 16× the 4096 spp at which `mis` is converged to 1 %
-/// (README).
+/// 2 MiB and a frame at 2048 dispatches, 16× the 4096 spp at which `mis` is within about 1 % relative
+/// L1 of the CPU reference (studio, sky; docs/renderer.md).
 pub const MAX_SPP: u32 = 1 << 16;
 
 /// The most pixels a GPU frame has: 8192×4096 (twice 8K UHD). Every pixel costs 64 bytes of render

@@ -39,7 +39,7 @@ pub struct Targets {
     pub gbuffer_of: Option<GBufferKey>,
     /// `pixels` lists the G-buffer's shaded pixels: a frame that rasterises and needs no pass over
     /// them leaves the list empty (`compact::Start`), and the next frame that keeps the G-buffer and
-    /// needs it lists them (session 26).
+    /// needs it lists them.
     pub pixels_listed: bool,
     /// The accumulation image as the background and diffuse passes left it, kept for frames that
     /// keep the G-buffer (painting: only the lobes change), and what it was made from.

@@ -1,4 +1,5 @@
-//! The mesh camera of SPEC §1: perspective, `eye`, `target`, `up`, vertical field of view; pixel
+//! The mesh camera (docs/model.md, Frames and conventions): perspective, `eye`, `target`, `up`, vertical field of view;
+//! pixel
 //! `(i, j)` (column, row from the top) samples the ray through its centre. The same camera gives the
 //! CPU reference its rays ([`Camera::ray`]) and the GPU rasteriser its view-projection matrix
 //! ([`Camera::view_proj`]), and the two agree (tested in `tests/mesh_camera.rs`).

@@ -1,5 +1,5 @@
-//! The environment map as plain CPU data (SPEC §1): loading (EXR through `exr`, scanline or tiled,
-//! any compression it reads; Radiance `.hdr` through `image`), the texel policy (NaN/Inf → 0,
+//! The environment map as plain CPU data (docs/model.md, Frames and conventions): loading (EXR through `exr`, scanline
+//! or tiled, any compression it reads; Radiance `.hdr` through `image`), the texel policy (NaN/Inf → 0,
 //! negatives kept and reported), bilinear lookup (what a `LINEAR`/`REPEAT u`/`CLAMP v` sampler
 //! returns at level 0 — the definition of the environment's radiance for the reference and `mis`),
 //! the solid-angle-weighted mip chain, the SH9 projection in `f64`, the brightest direction, and
@@ -154,7 +154,7 @@ impl Environment {
         Environment::from_texels(16, 8, vec![rgb; 128], "constant").expect("a valid size")
     }
 
-    /// SPEC §1: `u = fract(atan2(d.x, −d.z) / 2π)`, `v = acos(d.y) / π`.
+    /// docs/model.md, Frames and conventions: `u = fract(atan2(d.x, −d.z) / 2π)`, `v = acos(d.y) / π`.
     pub fn uv(dir: DVec3) -> (f64, f64) {
         let d = dir.normalize_or_zero();
         let u = (d.x.atan2(-d.z) / (2.0 * PI)).rem_euclid(1.0);

@@ -1,5 +1,5 @@
 //! Key lights: the compact, very bright sources of an environment map (a sun, a studio lamp) split
-//! off the map, the groundwork of issue 10's estimator (treat them analytically, prefilter and
+//! off the map, the groundwork of the `key` estimator (treat them analytically, prefilter and
 //! project onto SH9 only what is left).
 //!
 //! A key light is a connected region (8-neighbour, wrapping in `u`) of texels whose luminance exceeds
@@ -165,7 +165,7 @@ pub struct KeyLights {
 /// Wide lights: what is left of the map after the key lights is searched again at
 /// [`WIDE_THRESHOLD_OVER_MEAN`] for regions up to [`WIDE_MAX_SOLID_ANGLE`] (a studio's softbox, a
 /// bright window). Lobes wide enough to see every key and wide light as quadrature points
-/// ([`quadrature_fits`] over both) take them, and (session 19, in frames of enough samples) lobes
+/// ([`quadrature_fits`] over both) take them, and (in frames of enough samples) lobes
 /// that see them all as tiles ([`tiles`]): for those the wide lights leave the residual map they
 /// sample, whose hot spots would otherwise make their noise; every other lobe keeps them in its
 /// residual map, where its own samples resolve them better than light samples would.

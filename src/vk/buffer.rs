@@ -82,7 +82,7 @@ impl Buffer {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the buffer (work is waited on).
+        // SAFETY: the caller guarantees the GPU is done with the buffer (work is waited on).
         unsafe { ctx.raw().destroy_buffer(self.raw, None) };
         if let Ok(mut a) = ctx.allocator.lock() {
             let _ = a.free(self.allocation);

@@ -217,7 +217,7 @@ impl Image {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: the caller guarantees the GPU no longer uses the image (work is waited on).
+        // SAFETY: the caller guarantees the GPU is done with the image (work is waited on).
         unsafe {
             ctx.raw().destroy_image_view(self.view, None);
             ctx.raw().destroy_image(self.raw, None);

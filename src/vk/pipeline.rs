@@ -273,7 +273,7 @@ impl Pipeline {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: the GPU no longer uses the pipeline (work is waited on).
+        // SAFETY: the GPU is done with the pipeline (work is waited on).
         unsafe { self.destroy_on(ctx.raw()) };
     }
 

@@ -26,7 +26,7 @@ pub struct Swapchain {
 /// What acquiring gave.
 pub enum Acquired {
     Image(u32),
-    /// The swapchain no longer matches the surface: recreate it.
+    /// The swapchain does not match the surface: recreate it.
     OutOfDate,
 }
 

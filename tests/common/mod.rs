@@ -152,7 +152,8 @@ pub fn feature_materials() -> Vec<(&'static str, Material)> {
         symmetrize: true,
         lobes: vec![Lobe { rotation: DQuat::from_rotation_y(0.3), ..lobe(0.5, 0.25, 0.25) }],
     };
-    // The default model (issue 9): split and anisotropic facet lobes about tilted mean normals.
+    // The default model (docs/model.md, The reciprocal model): split and anisotropic facet lobes about tilted mean
+    // normals.
     let reciprocal = Material {
         diffuse: [0.2; 3],
         normalization: Normalization::Reciprocal,

@@ -1,7 +1,7 @@
 """Test harness for the exported Mitsuba plug-in (tests/export_mitsuba.rs): loads the plug-in file
-given as argv[1] (which registers `brdfshop`), reads direction pairs `wix wiy wiz wox woy woz` (SPEC §1
-local frame, f32 values) from argv[2] and prints, per pair, through Mitsuba's BSDF interface with a
-shading frame equal to the local frame:
+given as argv[1] (which registers `brdfshop`), reads direction pairs `wix wiy wiz wox woy woz`
+(the local frame of docs/model.md, Frames and conventions, f32 values) from argv[2] and prints, per
+pair, through Mitsuba's BSDF interface with a shading frame equal to the local frame:
 
     eval: f·cos θ_i (3 numbers) and pdf
     sample: for the view ω_o of the pair and two random numbers: the sampled ω_i (3), the returned

@@ -1,4 +1,4 @@
-//! Lights cut into tiles for a lobe narrower than they are (issue 10).
+//! Lights cut into tiles for a lobe narrower than they are (the `key` estimator).
 //!
 //! A lobe wider than a light sees it as the light's four quadrature points
 //! ([`super::quadrature_fits`]). A narrower lobe resolves the light's shape, and its light samples
@@ -19,7 +19,9 @@
 //! ([`max_points`]) gets none (`None`: it keeps MIS).
 //! `tests/keylight.rs` checks the bias against the exact integral over the texels.
 //!
-//! Pure CPU, a few microseconds per lobe: made per frame, not cached.
+//! Pure CPU, a few microseconds per lobe. The renderer makes a lobe's tiles once per map and keeps
+//! them with it (`render::environment::GpuKeyLights::tiles`, keyed by roughness, point budget and
+//! lights; up to 1024 lobes' tiles a map).
 
 use glam::DVec3;
 
@@ -37,7 +39,7 @@ use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 /// value over eight orientations of three lobes on four maps, against 22 % for tiles at the geometric
 /// mean `√(αx αy)`, which ignores the narrow axis). The lobe's smaller `α` instead, the bound at every
 /// orientation, takes 44 points for studio's lamp where this takes 28 (the sweep's Ward 0.05 × 0.3
-/// lobe; session 24).
+/// lobe).
 pub fn tile_alpha(alpha_x: f64, alpha_y: f64) -> f64 {
     let (a2, b2) = (alpha_x * alpha_x, alpha_y * alpha_y);
     (8.0 / (3.0 / (a2 * a2) + 2.0 / (a2 * b2) + 3.0 / (b2 * b2))).powf(0.25)
@@ -49,10 +51,10 @@ pub fn tile_alpha(alpha_x: f64, alpha_y: f64) -> f64 {
 /// stayed at 21–27 ms with the reach test), so a lobe that needs more keeps MIS.
 pub const MAX_TILE_POINTS: usize = 64;
 
-/// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`). 1024 since
-/// session 17 (512 before): studio's lamp as tiles for a lobe of α 0.02 took 768 points (212 since
-/// session 18's [`TILE_BUDGET`]), and that lobe's 8-spp error on the 64² sweep fell from 0.104 by MIS
-/// light samples to 0.022 (the mean of 4 frames' seeds).
+/// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`). Room for a
+/// sharp lobe's tiles: studio's lamp as tiles for a lobe of α 0.02 takes 768 points at a
+/// [`TILE_BUDGET`] of ½ (212 at 8), and that lobe's 8-spp error on the 64² sweep is 0.022 as tiles
+/// against 0.104 by MIS light samples (the mean of 4 frames' seeds).
 pub const MAX_BLOCK_POINTS: usize = 1024;
 
 /// The most points a lobe's tiles may take. Without the per-pixel reach test every shaded pixel
@@ -81,11 +83,11 @@ pub fn max_points(lights: &[KeyLight], reach: Option<(f64, f64)>) -> usize {
 }
 
 /// The tiles' moments sum to at most this multiple of the whole light's bound `|W| (r α)⁴`: the bias
-/// a lobe's tiles may leave, against the cost of their points. 8 since session 18 (½ before): the
+/// a lobe's tiles may leave, against the cost of their points. 8: the
 /// bound of a whole light seen as one tile's four points at spread `s ≤ 8^¼ r α = 0.76 α`, where the
 /// four points measured 4.9 % of the largest value at `s = 0.8 α` (`QUADRATURE_RATIO`'s table), so
 /// the tiles' bias stays within 5 % of the largest value (`tests/keylight.rs`; measured worst 3.7 %,
-/// against 0.8 % at ½). What it buys, measured on the 64² sweep (session 18): studio's lamp for a
+/// against 0.8 % at ½). What it buys against ½, measured on the 64² sweep (2-core lavapipe): studio's lamp for a
 /// Ward lobe of α 0.02 in 212 points instead of 768 (its 1-spp frame 0.76 → 0.39 ms, its 8-spp
 /// error 0.0155 → 0.0157, 256 spp 0.0058 → 0.0060), and a Ward 0.05 × 0.3 lobe on studio sees the lamp
 /// as 44 points instead of MIS light samples (8 spp: 0.138 → 0.081). The light term of a frame is

@@ -6,7 +6,8 @@
 //! transform; normals go through the inverse transpose, and a mirroring transform (negative
 //! determinant) has its triangles' winding reversed so they stay counter-clockwise from outside.
 //! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` are read; points and lines have no surface and are
-//! left out. Texture coordinates and tangents are not read (tangents follow SPEC §1's rule).
+//! left out. Texture coordinates and tangents are not read (tangents follow the rule of docs/model.md, Frames and
+//! conventions).
 
 use std::path::Path;
 
