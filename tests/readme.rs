@@ -57,17 +57,16 @@ fn walkthrough(readme: &str) -> Result<Vec<String>, String> {
     Ok(commands)
 }
 
-/// The files `line` names with `--out FILE` or `--out=FILE`.
+/// The files `line` names with `--out FILE` or `--out=FILE` (quotes and a trailing `;` dropped).
 fn outputs(line: &str) -> Vec<String> {
     let words: Vec<&str> = line.split_whitespace().collect();
+    let name = |f: &str| f.trim_end_matches(';').trim_matches(|c| c == '"' || c == '\'').to_owned();
     let mut out = Vec::new();
     for (i, w) in words.iter().enumerate() {
         if *w == "--out" {
-            if let Some(f) = words.get(i + 1) {
-                out.push(f.trim_matches(|c| c == '"' || c == '\'').to_owned());
-            }
+            out.extend(words.get(i + 1).map(|f| name(f)));
         } else if let Some(f) = w.strip_prefix("--out=") {
-            out.push(f.trim_matches(|c| c == '"' || c == '\'').to_owned());
+            out.push(name(f));
         }
     }
     out
@@ -148,5 +147,6 @@ fn the_walkthrough_parser_refuses_what_is_not_a_walkthrough() {
     assert!(walkthrough(&format!("{HEADING}\n\n```sh\nls\necho hi\n```\n")).unwrap_err().contains("no `brdf-shop`"));
     assert_eq!(outputs(block), vec!["first.brdf.json"]);
     assert_eq!(outputs("brdf-shop render --out=a.png --size 8x8"), vec!["a.png"]);
+    assert_eq!(outputs("brdf-shop paint --out b.json; ls"), vec!["b.json"]);
     assert!(outputs("brdf-shop check --material m.json").is_empty());
 }

@@ -35,10 +35,8 @@ fn tree(extra: &[(&str, &str)]) -> tempfile::TempDir {
 
 /// Runs the script in `dir`: exit status and stderr.
 fn check(dir: &tempfile::TempDir) -> (i32, String) {
-    let out = Command::new("bash")
-        .arg(dir.path().join("tools/check-self-contained"))
-        .output()
-        .expect("bash runs the script");
+    let out =
+        Command::new("bash").arg(dir.path().join("tools/check-self-contained")).output().expect("bash runs the script");
     (out.status.code().expect("an exit status"), String::from_utf8_lossy(&out.stderr).into_owned())
 }
 
@@ -57,11 +55,19 @@ fn each_history_marker_fails_with_file_and_line() {
         ("src/d.rs", format!("/// The frame ({} §1).\n", concat!("SP", "EC")), "src/d.rs:1:"),
         ("src/e.rs", format!("/// 75° ({} before).\n", 65), "src/e.rs:1:"),
         ("docs/renderer.md", format!("The pass {} runs twice.\n", concat!("no ", "longer")), "docs/renderer.md:1:"),
-        ("docs/perf/stability.md", format!("It {} took 9 ms.\n", concat!("previ", "ously")), "docs/perf/stability.md:1:"),
+        (
+            "docs/perf/stability.md",
+            format!("It {} took 9 ms.\n", concat!("previ", "ously")),
+            "docs/perf/stability.md:1:",
+        ),
         ("tools/run", format!("#!/bin/sh\n# The tool {} copy it.\n", concat!("used", " to")), "tools/run:2:"),
         ("glsl/f.comp", format!("// The cost ({}).\n", concat!("see ", "README")), "glsl/f.comp:1:"),
         ("README.md", format!("Fast {} the review.\n", concat!("since ", "session")), "README.md:1:"),
-        (concat!("docs/perf/bench-", "session", "13.txt"), "x\n".to_owned(), concat!("docs/perf/bench-", "session", "13.txt")),
+        (
+            concat!("docs/perf/bench-", "session", "13.txt"),
+            "x\n".to_owned(),
+            concat!("docs/perf/bench-", "session", "13.txt"),
+        ),
     ];
     for (path, text, want) in cases {
         let (code, stderr) = check(&tree(&[(path, text)]));
