@@ -1,4 +1,4 @@
-"""A model of the `key` estimator's residual term for one lobe (session 8, issue 10): is the rough lobes'
+"""A model of the `key` estimator's residual term for one lobe: is the rough lobes'
 8-spp error something a control variate could remove?
 
 For 300 random normals and views: the reference (65536 samples, level 0), `key`'s estimate (N Hammersley
@@ -10,9 +10,9 @@ per-pixel constant, the prefiltered map along the mirror direction at the lobe's
 trials. CONST=1 replaces the map by 1 (the weights' own quadrature error).
 
     pip install OpenEXR numpy
-    python3 docs/perf/models/rough_lobe_cv.py venice 0.5 [N]        # map, alpha, points (8)
+    python3 docs/perf/models/rough-lobe-control-variates.py venice 0.5 [N]        # map, alpha, points (8)
 
-Measured (session 8): venice alpha 0.5: key 0.115, cv 0.103, cvbeta 0.099, cvideal 0.100, ratio 0.099;
+Measured: venice alpha 0.5: key 0.115, cv 0.103, cvbeta 0.099, cvideal 0.100, ratio 0.099;
 city alpha 0.5: key 0.175, cv 0.161, ratio 0.159; venice alpha 0.5 at 16 / 32 points: 0.067 / 0.038.
 """
 import os, sys
