@@ -20,6 +20,8 @@
 
 #[path = "hostile/support.rs"]
 mod support;
+#[path = "hostile/untrusted.rs"]
+mod untrusted;
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
