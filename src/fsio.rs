@@ -184,7 +184,10 @@ pub fn check_output(flag: &str, path: &Path) -> Result<()> {
         Ok(m) if !m.is_file() => {
             return Err(Error::input(
                 flag,
-                format!("{}: is not a regular file (a device, FIFO or socket); outputs replace regular files only", show(path)),
+                format!(
+                    "{}: is not a regular file (a device, FIFO or socket); outputs replace regular files only",
+                    show(path)
+                ),
             ))
         }
         _ => {}

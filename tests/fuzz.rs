@@ -316,7 +316,8 @@ const STRUCTURED_CASES: u32 = 500;
 /// cycles and shared children happen), meshes of primitives (mode, POSITION and index accessors
 /// shared between them), accessors declaring counts from 0 to 2^32 over one small data buffer.
 fn gltf_reuse() -> impl Strategy<Value = Vec<u8>> {
-    let accessor = (0u32..4, prop_oneof![Just(0u64), Just(3), Just(7), Just(1 << 20), Just(1 << 31), Just(u32::MAX as u64)]);
+    let accessor =
+        (0u32..4, prop_oneof![Just(0u64), Just(3), Just(7), Just(1 << 20), Just(1 << 31), Just(u32::MAX as u64)]);
     let prim = (prop_oneof![Just(0u32), Just(4), Just(5), Just(6)], 0usize..4, prop::option::of(0usize..4));
     let mesh = prop::collection::vec(prim, 0..40);
     let node = (prop::option::of(0usize..3), prop::collection::vec(0usize..60, 0..4));

@@ -199,7 +199,7 @@ fn next_pids(n: u32) -> std::ops::Range<u32> {
     let last: u32 = std::fs::read_to_string("/proc/sys/kernel/ns_last_pid")
         .ok()
         .and_then(|s| s.trim().parse().ok())
-        .unwrap_or_else(|| std::process::id());
+        .unwrap_or_else(std::process::id);
     last + 1..last + 1 + n
 }
 
@@ -300,11 +300,8 @@ fn two_outputs_naming_one_file_are_refused_before_any_work() {
     std::fs::create_dir(d.join("sub")).unwrap();
     std::os::unix::fs::symlink("o.exr", d.join("alias.json")).unwrap();
     let o = s(&existing);
-    let spellings = [
-        format!("{}/./o.exr", s(d)),
-        format!("{}/sub/../o.exr", s(d)),
-        s(&d.join("alias.json")).to_string(),
-    ];
+    let spellings =
+        [format!("{}/./o.exr", s(d)), format!("{}/sub/../o.exr", s(d)), s(&d.join("alias.json")).to_string()];
     for cmd in ["render", "reference"] {
         for t in &spellings {
             let r = cpu(&[cmd, "--view", "canvas", "--size", "8x8", "--out", o, "--timings", t]);

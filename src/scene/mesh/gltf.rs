@@ -365,7 +365,8 @@ impl Loader<'_> {
         let escapes = decoded.contains('\0')
             || decoded.contains('\\')
             || rel.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir));
-        let outside = || format!("buffer {i}: URI \"{shown}\" leads out of the glTF file's folder (buffers are files beside it)");
+        let outside =
+            || format!("buffer {i}: URI \"{shown}\" leads out of the glTF file's folder (buffers are files beside it)");
         if escapes {
             return Err(outside());
         }

@@ -95,7 +95,10 @@ pub(crate) fn surfaces_only(bytes: &[u8]) -> std::result::Result<Vec<u8>, String
                 triangles += n as u64 - 2;
                 if triangles > super::MAX_TRIANGLES {
                     let limit = super::MAX_TRIANGLES;
-                    return Err(format!("line {}: expands to {triangles} triangles, past the limit of {limit}", no + 1));
+                    return Err(format!(
+                        "line {}: expands to {triangles} triangles, past the limit of {limit}",
+                        no + 1
+                    ));
                 }
                 for vertex in &w[1..] {
                     for (k, index) in vertex.split(|&b| b == b'/').enumerate().take(3) {
