@@ -195,6 +195,10 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
     export_plugin(&material, &plugin);
     let bunny = common::asset("meshes/bunny.obj");
     let ours = dir.path().join("bunny-mitsuba.exr");
+    // An existing output of other permissions: replaced by a complete image that keeps them.
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::write(&ours, b"old").unwrap();
+    std::fs::set_permissions(&ours, std::fs::Permissions::from_mode(0o640)).unwrap();
     let out = Command::new(python())
         .arg(&plugin)
         .args(["--mesh", bunny.to_str().unwrap(), "--size", "40x40", "--spp", "4", "--out"])
@@ -202,6 +206,13 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::metadata(&ours).unwrap().permissions().mode() & 0o7777, 0o640);
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".brdf-shop-"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
     let reference = dir.path().join("bunny-reference.exr");
     let (code, _, err) = common::run(&[
         "reference",
