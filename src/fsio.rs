@@ -317,6 +317,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn same_file_sees_through_spellings() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        // Not yet existing: by canonical folder and name.
+        assert!(same_file(&d.join("o.exr"), &d.join("sub/../o.exr")));
+        assert!(same_file(&d.join("o.exr"), &d.join("./o.exr")));
+        assert!(!same_file(&d.join("o.exr"), &d.join("sub/o.exr")));
+        // Existing: by device and inode, a symlink included.
+        std::fs::write(d.join("o.exr"), b"x").unwrap();
+        std::os::unix::fs::symlink("o.exr", d.join("link")).unwrap();
+        assert!(same_file(&d.join("o.exr"), &d.join("link")));
+        assert!(!same_file(&d.join("o.exr"), &d.join("p.exr")));
+    }
+
+    #[test]
+    fn a_failed_write_leaves_targets_and_no_temporary_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let a = d.join("a.txt");
+        std::fs::write(&a, b"old").unwrap();
+        let bad = d.join("missing/b.txt");
+        assert!(write_all_atomic(&[(&a, b"new"), (&bad, b"new")]).is_err());
+        assert_eq!(std::fs::read(&a).unwrap(), b"old");
+        let names: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, ["a.txt"]);
+    }
+
+    #[test]
     fn quote_cuts_and_escapes() {
         assert_eq!(quote("a\nb\u{1b}"), "a\\nb\\u{1b}");
         let long = "x".repeat(1000);
