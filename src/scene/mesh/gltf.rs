@@ -7,6 +7,11 @@
 //! determinant) has its triangles' winding reversed so they stay counter-clockwise from outside.
 //! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` are read; points and lines have no surface and are
 //! left out. Texture coordinates and tangents are not read (tangents follow SPEC §1's rule).
+//!
+//! Untrusted files: the triangles, vertices and primitives the scene expands to (every reuse of an
+//! accessor, mesh or node counted) are checked against the limits before any buffer is read, and an
+//! external buffer must be a regular file inside the glTF file's own folder (docs/formats.md,
+//! Limits and untrusted input).
 
 use std::path::{Component, Path};
 
