@@ -106,6 +106,32 @@ fn gltf_reused_accessors_meshes_and_nodes_count_against_the_limit() {
     assert_eq!(listing(d), ["b.bin", "bomb.gltf", "env.exr", "points.gltf"]);
 }
 
+#[test]
+fn ply_and_obj_faces_expanding_past_the_limit() {
+    let dir = tmp();
+    let d = dir.path();
+    let env = exr_file(d, "env.exr", 1.0);
+    let out = d.join("o.exr");
+    // One polygon of 2^24 + 3 corners (fan-triangulated: 2^24 + 1 triangles): a binary PLY whose
+    // list items (vertex 0, one byte each) are the zeros of a sparse tail.
+    let n: u32 = (1 << 24) + 3;
+    let mut head = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uint uchar vertex_indices\nend_header\n"
+        .to_vec();
+    head.extend(triangle_bytes());
+    head.extend(n.to_le_bytes());
+    let ply = write(d, "fan.ply", &head);
+    std::fs::OpenOptions::new().write(true).open(&ply).unwrap().set_len(head.len() as u64 + n as u64).unwrap();
+    refused(&reference(&env, &ply, &out), 1, &[s(&ply), "expands to", "limit"]);
+    // The same polygon as an OBJ face line.
+    let mut obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf".to_vec();
+    obj.extend(b" 1".repeat(n as usize));
+    obj.push(b'\n');
+    let obj = write(d, "fan.obj", obj);
+    refused(&reference(&env, &obj, &out), 1, &[s(&obj), "line 4", "limit"]);
+    assert_eq!(listing(d), ["env.exr", "fan.obj", "fan.ply"]);
+}
+
 // ---------------------------------------------------------------------------------------------------
 // glTF buffers: FIFOs, zero lengths, URIs leading out of the folder, long URIs.
 
