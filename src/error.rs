@@ -20,7 +20,7 @@ pub enum Error {
     /// No usable Vulkan device (exit status 2); the message says how to get one.
     #[error("{0}")]
     NoDevice(String),
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", crate::fsio::show(path))]
     Io {
         path: PathBuf,
         #[source]

@@ -1,7 +1,9 @@
 //! Text and file input/output. `shortest` prints an `f64` so it reads back bit for bit.
 //!
-//! Atomic file writes: the bytes go to a temporary file beside the target, are flushed to disk, and
+//! Atomic file writes: the bytes go to a temporary file beside the target (created exclusively under
+//! an unpredictable name, with the permissions of the file it replaces), are flushed to disk, and
 //! the temporary file is renamed over the target. A failure at any step leaves the target as it was.
+//! An existing output that is not a regular file (a device, FIFO, socket) is refused.
 //! [`write_all_atomic`] does the same for several outputs of one command: every temporary file is
 //! written before the first rename, so a failure leaves every target as it was.
 //!
@@ -11,7 +13,7 @@
 //! escaped.
 
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{Error, Result};
 
@@ -99,6 +101,40 @@ pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// [`read_limited`] for a file that must be a regular file: anything else (a FIFO, a device,
+/// `/dev/stdin`, a socket) is refused before it is opened, and the file is opened without blocking
+/// (`O_NONBLOCK`) and without following a symlink at its last component (`O_NOFOLLOW`) and checked
+/// again once open, so a file swapped for a FIFO in between cannot make the read wait forever.
+/// For the files a file refers to (a glTF file's buffers); the files a user names are read with
+/// [`read_limited`]. The error says what is wrong without naming the path (the caller names it).
+pub fn read_regular_limited(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, String> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let not_regular = "is not a regular file (a FIFO, device or socket)".to_string();
+    let meta = std::fs::metadata(path).map_err(|e| e.kind().to_string())?;
+    if !meta.is_file() {
+        return Err(not_regular);
+    }
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW)
+        .open(path)
+        .map_err(|e| e.kind().to_string())?;
+    let meta = file.metadata().map_err(|e| e.kind().to_string())?;
+    if !meta.is_file() {
+        return Err(not_regular);
+    }
+    let too_big = |len: u64| format!("{len} bytes or more is larger than the limit ({limit} bytes)");
+    if meta.len() > limit {
+        return Err(too_big(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(|e| e.kind().to_string())?;
+    if bytes.len() as u64 > limit {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
 /// [`read_limited`] as UTF-8 text.
 pub fn read_text_limited(path: &Path, limit: u64, what: &str) -> Result<String> {
     let bytes = read_limited(path, limit, what)?;
@@ -118,26 +154,84 @@ fn parent_of(path: &Path) -> &Path {
     }
 }
 
+/// The start of every temporary file name: short, so that an output name of up to 255 bytes (the
+/// longest most file systems take) still works, and with a random part after it (from `tempfile`),
+/// so that nothing planted in the folder can be at the name before the file is created.
+const TEMP_PREFIX: &str = ".brdf-shop-";
+
+/// A new, empty temporary file in `dir`, created exclusively (`O_EXCL`, so a symlink or FIFO planted
+/// at its name is never followed or opened) under an unpredictable name, with the permissions a new
+/// file gets (`0666` less the umask; `tempfile`'s default is `0600`).
+fn new_temp(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    use std::os::unix::fs::PermissionsExt;
+    tempfile::Builder::new()
+        .prefix(TEMP_PREFIX)
+        .rand_bytes(8)
+        .permissions(std::fs::Permissions::from_mode(0o666))
+        .tempfile_in(dir)
+}
+
 /// Checks, before any work, that `path` can be written atomically: it has a file name, is not a
-/// folder, and its folder exists and accepts a new file (a probe file is created and removed).
-/// `flag` names the option in the message.
+/// folder, is not something other than a regular file (a device, FIFO or socket: replacing
+/// `/dev/null` by a file is never meant), and its folder exists and accepts a new file (a temporary
+/// file is created there and removed). `flag` names the option in the message.
 pub fn check_output(flag: &str, path: &Path) -> Result<()> {
-    let name = path.file_name().ok_or_else(|| Error::input(flag, format!("{}: not a file name", show(path))))?;
-    if path.is_dir() {
-        return Err(Error::input(flag, format!("{}: is a folder, not a file", show(path))));
+    if path.file_name().is_none() {
+        return Err(Error::input(flag, format!("{}: not a file name", show(path))));
+    }
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => return Err(Error::input(flag, format!("{}: is a folder, not a file", show(path)))),
+        Ok(m) if !m.is_file() => {
+            return Err(Error::input(
+                flag,
+                format!(
+                    "{}: is not a regular file (a device, FIFO or socket); outputs replace regular files only",
+                    show(path)
+                ),
+            ))
+        }
+        _ => {}
     }
     let dir = parent_of(path);
     if !dir.is_dir() {
         return Err(Error::input(flag, format!("{}: the folder {} does not exist", show(path), show(dir))));
     }
-    let probe = dir.join(format!(".{}.{}.probe", name.to_string_lossy(), std::process::id()));
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
+    match new_temp(dir) {
+        Ok(probe) => {
+            drop(probe);
             Ok(())
         }
         Err(e) => Err(Error::input(flag, format!("{}: cannot write in {}: {e}", show(path), show(dir)))),
     }
+}
+
+/// Whether two output paths name the same file, however spelled (`o.exr`, `./o.exr`, `d/../o.exr`,
+/// a symlink to it): by device and inode where both exist, else by canonical folder and file name.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+    }
+    let spot = |p: &Path| Some((std::fs::canonicalize(parent_of(p)).ok()?, p.file_name()?.to_owned()));
+    match (spot(a), spot(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// [`check_output`] for every output of one command, then refuses two that name the same file
+/// (compared by [`same_file`]): all before any work, so a refusal leaves every existing file as it
+/// was. `outputs` are (flag, path) in the order the command's help lists them.
+pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
+    for (flag, path) in outputs {
+        check_output(flag, path)?;
+    }
+    for (k, (flag_b, b)) in outputs.iter().enumerate() {
+        if let Some((flag_a, _)) = outputs[..k].iter().find(|(_, a)| same_file(a, b)) {
+            return Err(Error::input(*flag_b, format!("{}: names the same file as {flag_a}", show(b))));
+        }
+    }
+    Ok(())
 }
 
 /// Checks, before any work, that `dir` is a folder that exists or can be created (its nearest
@@ -158,15 +252,28 @@ pub fn check_output_dir(flag: &str, dir: &Path) -> Result<()> {
     }
 }
 
-fn temp_path(path: &Path) -> Result<PathBuf> {
-    let name = path.file_name().ok_or_else(|| Error::input(show(path), "not a file name"))?;
-    Ok(parent_of(path).join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id())))
+/// A complete temporary file for `path` in its folder: created by [`new_temp`], with the
+/// permissions of the file it replaces (when there is one), `bytes` written and flushed to disk.
+fn write_temp(path: &Path, bytes: &[u8]) -> std::io::Result<tempfile::NamedTempFile> {
+    let mut tmp = new_temp(parent_of(path))?;
+    if let Ok(m) = std::fs::metadata(path) {
+        tmp.as_file().set_permissions(m.permissions())?;
+    }
+    tmp.write_all(bytes)?;
+    tmp.as_file().sync_all()?;
+    Ok(tmp)
 }
 
-fn write_temp(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut f = std::fs::File::create(tmp)?;
-    f.write_all(bytes)?;
-    f.sync_all()
+/// Refuses an existing output that is not a regular file (checked again at writing: it may have
+/// appeared after [`check_output`] ran).
+fn refuse_special(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(Error::input(
+            show(path),
+            "is not a regular file (a device, FIFO or socket); outputs replace regular files only",
+        )),
+        _ => Ok(()),
+    }
 }
 
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
@@ -174,34 +281,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Writes several files atomically as one: every temporary file is written and flushed first, then
-/// each is renamed over its target. A failure while writing leaves every target as it was.
+/// each is renamed over its target. A failure while writing leaves every target as it was and
+/// removes the temporary files. A temporary file is only ever left behind by a process killed
+/// between creating and renaming it (`kill -9`, power loss): a hidden `.brdf-shop-XXXXXXXX` file
+/// beside the output, which no run reads or reuses and which may be deleted at any time.
 pub fn write_all_atomic(outputs: &[(&Path, &[u8])]) -> Result<()> {
-    let mut temps: Vec<PathBuf> = Vec::with_capacity(outputs.len());
-    let cleanup = |temps: &[PathBuf]| {
-        for t in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
+    let mut temps = Vec::with_capacity(outputs.len());
     for (path, bytes) in outputs {
-        let tmp = match temp_path(path) {
-            Ok(t) => t,
-            Err(e) => {
-                cleanup(&temps);
-                return Err(e);
-            }
-        };
-        let result = write_temp(&tmp, bytes);
-        temps.push(tmp);
-        if let Err(e) = result {
-            cleanup(&temps);
-            return Err(Error::io(path, e));
+        if path.file_name().is_none() {
+            return Err(Error::input(show(path), "not a file name"));
         }
+        refuse_special(path)?;
+        // On an error, the temporary files written so far are removed as `temps` is dropped.
+        temps.push(write_temp(path, bytes).map_err(|e| Error::io(*path, e))?);
     }
-    for (k, ((path, _), tmp)) in outputs.iter().zip(&temps).enumerate() {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps[k..]);
-            return Err(Error::io(path, e));
-        }
+    for ((path, _), tmp) in outputs.iter().zip(temps) {
+        tmp.persist(path).map_err(|e| Error::io(*path, e.error))?;
     }
     Ok(())
 }
@@ -220,6 +315,35 @@ pub fn shortest(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn same_file_sees_through_spellings() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        // Not yet existing: by canonical folder and name.
+        assert!(same_file(&d.join("o.exr"), &d.join("sub/../o.exr")));
+        assert!(same_file(&d.join("o.exr"), &d.join("./o.exr")));
+        assert!(!same_file(&d.join("o.exr"), &d.join("sub/o.exr")));
+        // Existing: by device and inode, a symlink included.
+        std::fs::write(d.join("o.exr"), b"x").unwrap();
+        std::os::unix::fs::symlink("o.exr", d.join("link")).unwrap();
+        assert!(same_file(&d.join("o.exr"), &d.join("link")));
+        assert!(!same_file(&d.join("o.exr"), &d.join("p.exr")));
+    }
+
+    #[test]
+    fn a_failed_write_leaves_targets_and_no_temporary_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let a = d.join("a.txt");
+        std::fs::write(&a, b"old").unwrap();
+        let bad = d.join("missing/b.txt");
+        assert!(write_all_atomic(&[(&a, b"new"), (&bad, b"new")]).is_err());
+        assert_eq!(std::fs::read(&a).unwrap(), b"old");
+        let names: Vec<_> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, ["a.txt"]);
+    }
 
     #[test]
     fn quote_cuts_and_escapes() {

@@ -411,15 +411,33 @@ fn dropping_the_energy_report_worker_does_not_wait_for_it() {
     result.expect("dropping the worker waited for its thread");
 }
 
-/// Scripted drops (`--drop`): good files (a map, a mesh, a material) take effect, bad ones (a broken
-/// EXR, a missing OBJ, a truncated material) are one stderr line each and a status line, and the
-/// session goes on to write `--out` — the material dropped last, after the bad files.
+/// Scripted drops (`--drop`): good files (a map, a mesh, a PLY with a second `vertex` element, a
+/// material) take effect, bad ones (a broken EXR, a missing OBJ, a glTF whose buffer lies outside
+/// its folder, a truncated material) are one stderr line each and a status line, and the session
+/// goes on to write `--out` — the material dropped last, after the bad files.
 #[test]
 fn dropped_files_that_do_not_load_do_not_end_the_session() {
     let dir = tempfile::TempDir::new().unwrap();
     let d = |n: &str| dir.path().join(n);
     std::fs::write(d("broken.exr"), b"not an exr").unwrap();
     std::fs::write(d("cut.brdf.json"), b"{\"format\": \"brdf-shop/material\", \"vers").unwrap();
+    std::fs::write(
+        d("two-vertex.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nelement vertex 1\nproperty float q\nend_header\n\
+         0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n5\n",
+    )
+    .unwrap();
+    std::fs::create_dir(d("mesh")).unwrap();
+    let escape = serde_json::json!({
+        "asset": { "version": "2.0" }, "scenes": [{ "nodes": [0] }], "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0] }],
+        "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+        "buffers": [{ "uri": "../two-vertex.ply", "byteLength": 36 }],
+    });
+    std::fs::write(d("mesh/escape.gltf"), escape.to_string()).unwrap();
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let good = assets.join("bench-4lobes.brdf.json");
     let run = Command::new("xvfb-run")
@@ -431,6 +449,10 @@ fn dropped_files_that_do_not_load_do_not_end_the_session() {
         .arg(assets.join("hdri/city.exr"))
         .arg("--drop")
         .arg(d("missing.obj"))
+        .arg("--drop")
+        .arg(d("two-vertex.ply"))
+        .arg("--drop")
+        .arg(d("mesh/escape.gltf"))
         .arg("--drop")
         .arg(assets.join("meshes/bunny.obj"))
         .arg("--drop")
@@ -447,8 +469,8 @@ fn dropped_files_that_do_not_load_do_not_end_the_session() {
     assert!(run.status.success(), "editor ended: {stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
     let refusals: Vec<&str> = stderr.lines().filter(|l| l.contains("not loaded")).collect();
-    assert_eq!(refusals.len(), 3, "{stderr}");
-    for (line, name) in refusals.iter().zip(["broken.exr", "missing.obj", "cut.brdf.json"]) {
+    assert_eq!(refusals.len(), 4, "{stderr}");
+    for (line, name) in refusals.iter().zip(["broken.exr", "missing.obj", "escape.gltf", "cut.brdf.json"]) {
         assert!(line.contains(name), "{line}");
     }
     let out = Material::load(&d("out.brdf.json")).unwrap();

@@ -315,6 +315,36 @@ const vec3 Y = cross(N, X);
     }
 }
 
+/// Tangent angles far outside (−π, π] (1e300 would be `inf` as BRDF Explorer's `f32` parameter,
+/// 12345.678 off by 2.7e-4 rad) are written reduced in `f64`: the parameter's cosine and sine are the
+/// model's to 1e-6 (an `f32` within ±π is within 1.2e-7 rad of the reduced angle; the bound leaves
+/// room for the reduction's own rounding). A CPU check of the file: the GPU comparison above covers
+/// the shader for in-range angles.
+#[test]
+fn brdf_explorer_export_reduces_tangent_angles_in_double_precision() {
+    let dir = tempfile::tempdir().unwrap();
+    let angles = [1e300, 12345.678, -1e10, -3.1, 3.0, 7.0];
+    let lobes = angles.iter().map(|&a| Lobe { tangent_angle: a, ..common::lobe(0.1, 0.2, 0.05) }).collect();
+    let path = dir.path().join("angles.brdf.json");
+    Material { diffuse: [0.2; 3], lobes, ..Material::scratch() }.save(&path).unwrap();
+    let text = export(&path, "brdf-explorer", &dir.path().join("angles.brdf"));
+    let (params, _) = load_brdf_explorer(&text);
+    for (k, a) in angles.iter().enumerate() {
+        let name = format!("lobe{k}_tangent_angle");
+        let v = params
+            .iter()
+            .find_map(|p| match p {
+                Param::Float(n, v) if *n == name => Some(*v as f64),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("no {name}"));
+        let pi = std::f64::consts::PI as f32 as f64;
+        assert!(v.abs() <= pi, "{name} = {v} for {a}");
+        let (dc, ds) = ((v.cos() - a.cos()).abs(), (v.sin() - a.sin()).abs());
+        assert!(dc < 1e-6 && ds < 1e-6, "{name} = {v} for {a}: cos off by {dc:.1e}, sin by {ds:.1e}");
+    }
+}
+
 #[test]
 fn export_refusals_are_one_line_and_leave_outputs_alone() {
     let dir = tempfile::tempdir().unwrap();

@@ -195,6 +195,10 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
     export_plugin(&material, &plugin);
     let bunny = common::asset("meshes/bunny.obj");
     let ours = dir.path().join("bunny-mitsuba.exr");
+    // An existing output of other permissions: replaced by a complete image that keeps them.
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::write(&ours, b"old").unwrap();
+    std::fs::set_permissions(&ours, std::fs::Permissions::from_mode(0o640)).unwrap();
     let out = Command::new(python())
         .arg(&plugin)
         .args(["--mesh", bunny.to_str().unwrap(), "--size", "40x40", "--spp", "4", "--out"])
@@ -202,6 +206,13 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::metadata(&ours).unwrap().permissions().mode() & 0o7777, 0o640);
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".brdf-shop-"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
     let reference = dir.path().join("bunny-reference.exr");
     let (code, _, err) = common::run(&[
         "reference",
@@ -236,7 +247,12 @@ fn mitsuba_script_refuses_bad_arguments_in_one_line() {
     let o = out_exr.to_str().unwrap();
     let missing = dir.path().join("missing.exr");
     let png = dir.path().join("o.png");
-    let cases: [(Vec<&str>, &str); 6] = [
+    // An output that is a FIFO (a device node in a shared folder, a planted pipe): refused before the
+    // render, never replaced.
+    let fifo = dir.path().join("pipe.exr");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let cases: [(Vec<&str>, &str); 7] = [
+        (vec!["--size", "4x4", "--spp", "1", "--out", fifo.to_str().unwrap()], "regular file"),
         (vec!["--env", missing.to_str().unwrap(), "--out", o], "missing.exr"),
         (vec!["--env", plugin.to_str().unwrap(), "--out", o], "--env"),
         (vec!["--size", "0x5", "--out", o], "--size"),
@@ -251,5 +267,48 @@ fn mitsuba_script_refuses_bad_arguments_in_one_line() {
         assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
         assert!(stderr.contains(needle), "{args:?}: {stderr}");
         assert!(!out_exr.exists(), "{args:?} wrote an image");
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO was replaced");
+}
+
+/// Directions of tiny non-unit length (subnormal components, 1e-320): the plug-in's normalisation
+/// scales them exactly before taking a reciprocal, so its `brdf_eval` (called directly in `f64`, as
+/// Mitsuba's `f32` interface cannot carry 1e-320) equals the model's, which normalises them the same
+/// way. Same tolerance as [`EVAL_TOLERANCE`]: both sides evaluate in `f64`.
+#[test]
+fn plugin_normalises_subnormal_directions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (name, path) = common::export_materials(dir.path()).swap_remove(0);
+    let m = Material::load(&path).unwrap();
+    let plugin = dir.path().join("p.py");
+    export_plugin(&path, &plugin);
+    let cases = [
+        (DVec3::new(1e-320, 2e-320, 3e-320), DVec3::new(0.0, 1e-320, 1e-320)),
+        (DVec3::new(0.0, 0.0, 5e-324), DVec3::new(3e-320, 0.0, 4e-320)),
+        (DVec3::new(1e-310, -2e-310, 1e-309), DVec3::new(0.3, 0.1, 0.9)),
+    ];
+    let vec = |v: DVec3| format!("(F64({:e}), F64({:e}), F64({:e}))", v.x, v.y, v.z);
+    let mut script = String::from(
+        "import importlib.util, sys\nimport mitsuba as mi\nmi.set_variant('llvm_ad_rgb')\n\
+         spec = importlib.util.spec_from_file_location('p', sys.argv[1])\n\
+         p = importlib.util.module_from_spec(spec)\nspec.loader.exec_module(p)\nF64 = mi.Float64\n",
+    );
+    for (wi, wo) in &cases {
+        script += &format!("print(*[float(c[0]) for c in p.brdf_eval({}, {})])\n", vec(*wi), vec(*wo));
+    }
+    let out = Command::new(python()).arg("-c").arg(&script).arg(&plugin).output().unwrap();
+    assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), cases.len(), "{stdout}");
+    for ((wi, wo), line) in cases.iter().zip(lines) {
+        let got: Vec<f64> = line.split_whitespace().map(|v| v.parse().unwrap()).collect();
+        let want = m.eval(*wi, *wo);
+        for c in 0..3 {
+            assert!(want[c] > 0.0, "{name}: the model gives 0 for {wi:?}, {wo:?}");
+            let err = (got[c] - want[c]).abs() / want[c];
+            assert!(err < EVAL_TOLERANCE, "{name}: {wi:?} {wo:?}: plug-in {} against eval {}", got[c], want[c]);
+        }
     }
 }

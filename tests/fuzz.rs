@@ -308,6 +308,186 @@ proptest! {
     }
 }
 
+/// Cases of the structured mesh targets (glTF reuse, PLY element orders): each builds and loads a
+/// small file, about as fast as a mutated seed.
+const STRUCTURED_CASES: u32 = 500;
+
+/// A glTF scene of reused parts: `nodes` (each its mesh, or none, and children: any node, so
+/// cycles and shared children happen), meshes of primitives (mode, POSITION and index accessors
+/// shared between them), accessors declaring counts from 0 to 2^32 over one small data buffer.
+fn gltf_reuse() -> impl Strategy<Value = Vec<u8>> {
+    let accessor =
+        (0u32..4, prop_oneof![Just(0u64), Just(3), Just(7), Just(1 << 20), Just(1 << 31), Just(u32::MAX as u64)]);
+    let prim = (prop_oneof![Just(0u32), Just(4), Just(5), Just(6)], 0usize..4, prop::option::of(0usize..4));
+    let mesh = prop::collection::vec(prim, 0..40);
+    let node = (prop::option::of(0usize..3), prop::collection::vec(0usize..60, 0..4));
+    (
+        prop::collection::vec(accessor, 4),
+        prop::collection::vec(mesh, 3),
+        prop::collection::vec(node, 1..60),
+        prop::collection::vec(0usize..60, 1..8),
+    )
+        .prop_map(|(accessors, meshes, nodes, roots)| {
+            let n = nodes.len();
+            // Buffer: 7 vertices, then 7 u16 indices (a data URI).
+            let mut buf: Vec<u8> = (0..21).flat_map(|k| ((k % 5) as f32).to_le_bytes()).collect();
+            buf.extend((0u16..7).flat_map(|i| i.to_le_bytes()));
+            let accessors: Vec<_> = accessors
+                .iter()
+                .enumerate()
+                .map(|(k, &(kind, count))| {
+                    if k % 2 == 0 || kind == 0 {
+                        serde_json::json!({"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3",
+                                           "min": [0, 0, 0], "max": [4, 4, 4]})
+                    } else {
+                        serde_json::json!({"bufferView": 1, "componentType": 5123, "count": count, "type": "SCALAR"})
+                    }
+                })
+                .collect();
+            let meshes: Vec<_> = meshes
+                .iter()
+                .map(|prims| {
+                    let prims: Vec<_> = prims
+                        .iter()
+                        .map(|&(mode, pos, idx)| {
+                            let mut p = serde_json::json!({"attributes": {"POSITION": pos}, "mode": mode});
+                            if let Some(i) = idx {
+                                p["indices"] = serde_json::json!(i);
+                            }
+                            p
+                        })
+                        .collect();
+                    serde_json::json!({ "primitives": prims })
+                })
+                .collect();
+            let nodes: Vec<_> = nodes
+                .iter()
+                .map(|(mesh, children)| {
+                    let mut v = serde_json::json!({});
+                    if let Some(m) = mesh {
+                        v["mesh"] = serde_json::json!(m);
+                    }
+                    let children: Vec<usize> = children.iter().map(|c| c % n).collect();
+                    if !children.is_empty() {
+                        v["children"] = serde_json::json!(children);
+                    }
+                    v
+                })
+                .collect();
+            let roots: Vec<usize> = roots.iter().map(|r| r % n).collect();
+            serde_json::json!({
+                "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": roots}], "nodes": nodes,
+                "meshes": meshes, "accessors": accessors,
+                "bufferViews": [{"buffer": 0, "byteLength": 84}, {"buffer": 0, "byteOffset": 84, "byteLength": 14}],
+                "buffers": [{"byteLength": buf.len(), "uri": format!("data:application/octet-stream;base64,{}", base64(&buf))}],
+            })
+            .to_string()
+            .into_bytes()
+        })
+}
+
+/// One PLY element of a random kind: the mesh's `vertex` (x y z), a `vertex` of other properties,
+/// a `face` with or without its index list, or an element of another name; with its count.
+#[derive(Clone, Copy, Debug)]
+enum PlyElement {
+    Vertex,
+    OtherVertex,
+    Face,
+    FaceWithoutList,
+    Other,
+}
+
+/// A PLY file whose elements come in any order and may repeat, ASCII or binary (either byte order),
+/// with values of the right shape (face indices 0..6, some past the vertices).
+fn ply_orderings() -> impl Strategy<Value = Vec<u8>> {
+    let element = (
+        prop_oneof![
+            Just(PlyElement::Vertex),
+            Just(PlyElement::OtherVertex),
+            Just(PlyElement::Face),
+            Just(PlyElement::FaceWithoutList),
+            Just(PlyElement::Other)
+        ],
+        0u32..5,
+    );
+    (0u8..3, prop::collection::vec(element, 1..7), prop::collection::vec(0u8..7, 64)).prop_map(
+        |(format, elements, values)| {
+            let name = ["ascii", "binary_little_endian", "binary_big_endian"][format as usize];
+            let mut head = format!("ply\nformat {name} 1.0\n");
+            let mut body = Vec::new();
+            let mut v = values.iter().cycle();
+            let put = |body: &mut Vec<u8>, x: u8, float: bool| match (format, float) {
+                (0, _) => body.extend_from_slice(format!("{x} ").as_bytes()),
+                (1, true) => body.extend_from_slice(&(x as f32).to_le_bytes()),
+                (_, true) => body.extend_from_slice(&(x as f32).to_be_bytes()),
+                (1, false) => body.extend_from_slice(&(x as i32).to_le_bytes()),
+                (_, false) => body.extend_from_slice(&(x as i32).to_be_bytes()),
+            };
+            for (kind, count) in elements {
+                let (el, props): (&str, &[&str]) = match kind {
+                    PlyElement::Vertex => ("vertex", &["float x", "float y", "float z"]),
+                    PlyElement::OtherVertex => ("vertex", &["float q"]),
+                    PlyElement::Face => ("face", &["list uchar int vertex_indices"]),
+                    PlyElement::FaceWithoutList => ("face", &["int k"]),
+                    PlyElement::Other => ("edge", &["int a", "int b"]),
+                };
+                head += &format!("element {el} {count}\n");
+                for p in props {
+                    head += &format!("property {p}\n");
+                }
+                for _ in 0..count {
+                    for p in props {
+                        if p.starts_with("list") {
+                            let n = 3 + v.next().unwrap() % 3;
+                            match format {
+                                0 => body.extend_from_slice(format!("{n} ").as_bytes()),
+                                _ => body.push(n),
+                            }
+                            for _ in 0..n {
+                                put(&mut body, *v.next().unwrap(), false);
+                            }
+                        } else {
+                            put(&mut body, *v.next().unwrap(), p.starts_with("float"));
+                        }
+                    }
+                    if format == 0 {
+                        body.push(b'\n');
+                    }
+                }
+            }
+            head += "end_header\n";
+            let mut bytes = head.into_bytes();
+            bytes.extend(body);
+            bytes
+        },
+    )
+}
+
+/// A structured mesh case: the load returns (no panic), a refusal is a clean user error, and a
+/// mesh that loads is within the limits.
+fn loads_within_limits(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
+    let r = via_file(name, bytes, Mesh::load);
+    if let Ok(m) = &r {
+        prop_assert!(m.triangle_count() as u64 <= brdf_shop::scene::mesh::MAX_TRIANGLES);
+        prop_assert!(m.positions.len() as u64 <= brdf_shop::scene::mesh::MAX_VERTICES);
+    }
+    refused_cleanly(r)
+}
+
+proptest! {
+    #![proptest_config(config(STRUCTURED_CASES))]
+
+    #[test]
+    fn fuzz_gltf_node_and_accessor_reuse(bytes in gltf_reuse()) {
+        loads_within_limits("r.gltf", &bytes)?;
+    }
+
+    #[test]
+    fn fuzz_ply_element_orders(bytes in ply_orderings()) {
+        loads_within_limits("o.ply", &bytes)?;
+    }
+}
+
 /// `eval` through the binary: exit 0 with one output line per input line, or exit 1 with one
 /// stderr line and nothing on stdout.
 fn eval_run(material: &Path, input: &[u8]) -> Result<(), TestCaseError> {

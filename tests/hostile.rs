@@ -1,5 +1,6 @@
-//! Hostile input through the real binary: files with lying headers, absurd flags, huge
-//! lines and fields, outputs that cannot be written, Ctrl-C. Every case asserts the exit status,
+//! Hostile input through the real binary: files with lying headers, absurd flags, huge lines and
+//! fields, outputs that cannot be written, Ctrl-C; and (`hostile/untrusted.rs`) untrusted mesh files
+//! and shared output folders. Every case asserts the exit status,
 //! exactly one line on stderr, nothing on stdout (for refusals), no output left behind and existing
 //! outputs unchanged; and every case runs under an address-space limit and a wall-time limit, so an
 //! abort on allocation or a hang fails the test instead of the machine.
@@ -20,6 +21,8 @@
 
 #[path = "hostile/support.rs"]
 mod support;
+#[path = "hostile/untrusted.rs"]
+mod untrusted;
 
 use std::path::Path;
 use std::process::{Child, Command, Stdio};

@@ -430,7 +430,7 @@ fn bad_mesh_files_are_refused_by_name() {
         ("missing.gltf", edit(&|v| v["buffers"][0]["uri"] = json!("missing.bin")), "missing.bin"),
         ("short.gltf", edit(&|v| v["buffers"][0]["byteLength"] = json!(100_000)), "100000 declared"),
         ("past.gltf", edit(&|v| v["accessors"][0]["count"] = json!(1000)), "run past"),
-        ("huge.gltf", edit(&|v| v["accessors"][0]["count"] = json!(4_000_000_000u64)), "run past"),
+        ("huge.gltf", edit(&|v| v["accessors"][0]["count"] = json!(4_000_000_000u64)), "past the limit"),
         ("view.gltf", edit(&|v| v["bufferViews"][0]["byteLength"] = json!(1_000_000)), "reaches past"),
         ("nan.gltf", nan_doc.to_string().into_bytes(), "non-finite"),
         ("range.gltf", range_doc.to_string().into_bytes(), &range_msg),

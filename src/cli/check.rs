@@ -110,7 +110,7 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print!("{}: {}", material.display(), report_text(&m, &r, samples, pairs));
+        print!("{}: {}", brdf_shop::fsio::show(material), report_text(&m, &r, samples, pairs));
     }
     if r.is_physically_correct() {
         Ok(())

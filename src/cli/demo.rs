@@ -34,6 +34,6 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let text = super::check::report_text(&m, &report, samples, pairs);
     brdf_shop::fsio::write_atomic(&out.join("check.txt"), text.as_bytes())?;
     print!("{text}");
-    println!("wrote {0}/material.brdf.json, {0}/canvas.png, {0}/check.txt", out.display());
+    println!("wrote {0}/material.brdf.json, {0}/canvas.png, {0}/check.txt", brdf_shop::fsio::show(out));
     Ok(())
 }

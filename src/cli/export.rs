@@ -12,6 +12,6 @@ pub fn run(material: &Path, format: &str, out: &Path) -> anyhow::Result<()> {
     brdf_shop::fsio::check_output("--out", out)?;
     let m = Material::load(material)?;
     export::write(&m, format, out)?;
-    eprintln!("brdf-shop: wrote {} ({})", out.display(), format.name());
+    eprintln!("brdf-shop: wrote {} ({})", brdf_shop::fsio::show(out), format.name());
     Ok(())
 }

@@ -46,7 +46,7 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
         doc["viewer"] = viewer::json(&viewer);
         let text = serde_json::to_string_pretty(&doc).context("encoding JSON")? + "\n";
         brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
-        println!("wrote {}", path.display());
+        println!("wrote {}", brdf_shop::fsio::show(path));
     }
     Ok(())
 }
@@ -69,7 +69,7 @@ pub fn error_vs_time(
     // The summary as written (files: CSV, plot, summary).
     print!("{}", std::fs::read_to_string(&files[2]).map_err(|e| brdf_shop::Error::io(&files[2], e))?);
     for f in files {
-        println!("wrote {}", f.display());
+        println!("wrote {}", brdf_shop::fsio::show(&f));
     }
     Ok(())
 }
@@ -84,7 +84,7 @@ pub fn stability(quick: bool, out: Option<&Path>) -> anyhow::Result<()> {
     print!("{text}");
     if let Some(path) = out {
         brdf_shop::fsio::write_atomic(path, text.as_bytes())?;
-        println!("wrote {}", path.display());
+        println!("wrote {}", brdf_shop::fsio::show(path));
     }
     let bad: Vec<&str> = cases.iter().filter(|c| c.non_finite > 0).map(|c| c.name.as_str()).collect();
     if !bad.is_empty() {

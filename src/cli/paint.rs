@@ -30,6 +30,6 @@ pub fn run(strokes: &Path, material: Option<&Path>, out: &Path, model: Option<&s
     };
     let m = s.replay(&start, &brdf_shop::fsio::show(strokes))?;
     m.save(out)?;
-    eprintln!("wrote {} ({} lobes)", out.display(), m.lobes.len());
+    eprintln!("wrote {} ({} lobes)", brdf_shop::fsio::show(out), m.lobes.len());
     Ok(())
 }

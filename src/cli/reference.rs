@@ -38,7 +38,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         image.height,
         s.spp,
         ms / 1e3,
-        args.out.display()
+        brdf_shop::fsio::show(&args.out)
     );
     Ok(())
 }

@@ -38,7 +38,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         frame.image.height,
         renderer.device_name(),
         frame.timings.len(),
-        args.out.display()
+        brdf_shop::fsio::show(&args.out)
     );
     Ok(())
 }

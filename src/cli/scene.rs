@@ -125,16 +125,12 @@ fn canvas_light(args: &SceneArgs, env: Option<&Environment>, camera: &Camera) ->
 }
 
 /// Checks the output paths before any work: `--out` (an image format, a writable folder) and
-/// `--timings` (a writable folder, not the same file as `--out`).
+/// `--timings` (a writable folder, not the same file as `--out` however spelled).
 pub fn check_outputs(args: &SceneArgs) -> anyhow::Result<()> {
     brdf_shop::imageio::check_output_path(&args.out)?;
-    brdf_shop::fsio::check_output("--out", &args.out)?;
-    if let Some(t) = &args.timings {
-        brdf_shop::fsio::check_output("--timings", t)?;
-        if t == &args.out {
-            return Err(Error::input("--timings", "names the same file as --out").into());
-        }
-    }
+    let mut outputs = vec![("--out", args.out.as_path())];
+    outputs.extend(args.timings.as_deref().map(|t| ("--timings", t)));
+    brdf_shop::fsio::check_outputs(&outputs)?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         return Err(Error::input("--exposure", format!("must be a finite number > 0, got {}", args.exposure)).into());
     }

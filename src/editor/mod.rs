@@ -260,7 +260,7 @@ impl App {
         if let Some(path) = save_to {
             // A path that cannot be written is the user's to fix: a status line, the session goes on.
             state.status = match state.material().save(&path) {
-                Ok(()) => format!("saved {}", path.display()),
+                Ok(()) => format!("saved {}", crate::fsio::show(&path)),
                 Err(e) if e.is_user_error() => format!("not saved: {e}"),
                 Err(e) => return Err(e),
             };
@@ -304,9 +304,9 @@ impl App {
         } else if name.ends_with(".json") {
             let m = Material::load(p)?;
             state.history.push(m);
-            state.status = format!("loaded {}", p.display());
+            state.status = format!("loaded {}", crate::fsio::show(p));
         } else {
-            state.status = format!("{}: not an environment, mesh or material", p.display());
+            state.status = format!("{}: not an environment, mesh or material", crate::fsio::show(p));
         }
         gpu.window.request_redraw();
         Ok(())
@@ -438,12 +438,13 @@ pub fn run(opts: Options) -> Result<()> {
             Error::input("--resize", format!("{w}x{h}: each side must be within 1 and {MAX_WINDOW_SIDE} pixels"))
         })?;
     }
-    for (flag, path) in [("--out", &opts.out), ("--screenshot", &opts.screenshot), ("--frame-stats", &opts.frame_stats)]
-    {
-        if let Some(p) = path {
-            crate::fsio::check_output(flag, p)?;
-        }
-    }
+    // Each output a different file (however spelled), all refused before the window opens.
+    let outputs: Vec<(&str, &Path)> =
+        [("--out", &opts.out), ("--screenshot", &opts.screenshot), ("--frame-stats", &opts.frame_stats)]
+            .into_iter()
+            .filter_map(|(flag, p)| p.as_deref().map(|p| (flag, p)))
+            .collect();
+    crate::fsio::check_outputs(&outputs)?;
     let env = match &opts.env {
         Some(p) => Environment::load(p)?,
         None => crate::measure::embedded_environment()?,

@@ -163,6 +163,14 @@ brdf_ / BRDF_SHOP_; include it once.
     s
 }
 
+/// `angle` reduced modulo 2π in double precision to (−π, π]: the angle whose cosine and sine are
+/// those of `angle` in `f64` (what `brdf-shop eval` uses). The BRDF Explorer shader takes `cos` and
+/// `sin` of a 32-bit float, which for an unreduced angle is off by up to half an `f32` step
+/// (12345.678 rad: up to 5e-4 rad) or infinite (1e300).
+pub fn reduced_angle(angle: f64) -> f64 {
+    angle.sin().atan2(angle.cos())
+}
+
 /// `--format brdf-explorer`: a Disney BRDF Explorer analytic `.brdf` file. Every number of the
 /// material is a parameter (colours for the albedos, floats for roughness, tangent angle and the
 /// rotation quaternion `w x y z`, bools for split lobes and `symmetrize`); the model's form is fixed.
@@ -183,7 +191,7 @@ pub fn brdf_explorer(m: &Material) -> Result<String> {
     s.push_str(
         "# f(L, V) exactly as `brdf-shop eval` computes it (in single precision), in the frame X, Y, N the
 # viewer passes. Parameters: diffuse colour; per lobe k its albedo colour, roughness alpha_x/alpha_y
-# (1e-4..1), tangent angle (radians), rotation quaternion (w x y z, normalised in the shader) and split.
+# (1e-4..1), tangent angle (radians, -pi..pi), rotation quaternion (w x y z, normalised in the shader) and split.
 
 ::begin parameters
 ",
@@ -200,8 +208,8 @@ pub fn brdf_explorer(m: &Material) -> Result<String> {
         let _ = writeln!(s, "color lobe{k}_albedo {} {} {}", lit(a[0]), lit(a[1]), lit(a[2]));
         let _ = writeln!(s, "float lobe{k}_alpha_x 0.0001 1 {}", lit(l.alpha_x));
         let _ = writeln!(s, "float lobe{k}_alpha_y 0.0001 1 {}", lit(l.alpha_y));
-        let (lo, hi) = (l.tangent_angle.min(-pi), l.tangent_angle.max(pi));
-        let _ = writeln!(s, "float lobe{k}_tangent_angle {} {} {}", lit(lo), lit(hi), lit(l.tangent_angle));
+        let phi = reduced_angle(l.tangent_angle);
+        let _ = writeln!(s, "float lobe{k}_tangent_angle {} {} {}", lit(-pi), lit(pi), lit(phi));
         for (c, v) in [("w", q.w), ("x", q.x), ("y", q.y), ("z", q.z)] {
             let _ = writeln!(s, "float lobe{k}_rotation_{c} -1 1 {}", lit(v));
         }

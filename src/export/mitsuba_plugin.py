@@ -24,6 +24,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 
 import drjit as dr
 import mitsuba as mi
@@ -102,9 +103,16 @@ def rotate(q, v):
 
 
 def unit(v):
-    """`material::unit`: scale by the largest component, then normalise; zero vectors stay zero."""
+    """`material::unit`: scale by the largest component, then normalise; zero vectors stay zero.
+    A vector of tiny (subnormal) components is first scaled by 2^600, exactly: the reciprocal of a
+    subnormal largest component overflows to inf (1 / 1e-320), and a division by it may be flushed to
+    zero."""
     m = dr.maximum(dr.maximum(dr.abs(v[0]), dr.abs(v[1])), dr.abs(v[2]))
     ok = m > 0
+    tiny = m < 2.0 ** -500
+    k = dr.select(tiny, F64(2.0 ** 600), F64(1.0))
+    v = scale(v, k)
+    m = m * k
     inv_m = dr.select(ok, 1.0 / dr.select(ok, m, 1.0), 0.0)
     s = scale(v, inv_m)
     length = dr.sqrt(dot(s, s))
@@ -532,14 +540,29 @@ def render(env, mesh, width, height, spp, seed=0):
 
 
 def write_exr(path, img):
-    """Temp file + rename: an existing output is replaced only by a complete image."""
+    """Temp file + rename: an existing output is replaced only by a complete image. The temporary file
+    is created exclusively under an unpredictable name (`tempfile.mkstemp`: nothing planted in the
+    folder is followed or overwritten) and given the replaced file's permissions (a new file: 0666
+    less the umask). A run killed before the rename leaves a hidden `.brdf-shop-*.exr` beside the
+    output, which nothing reads and which may be deleted. An existing output that is not a regular
+    file (a device, FIFO or socket) is refused."""
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise UserError("--out: %r is not a regular file (a device, FIFO or socket)" % path[:80])
     folder = os.path.dirname(os.path.abspath(path))
-    tmp = os.path.join(folder, ".%s.%d.tmp.exr" % (os.path.basename(path), os.getpid()))
+    fd, tmp = tempfile.mkstemp(prefix=".brdf-shop-", suffix=".exr", dir=folder)
+    os.close(fd)
     try:
+        if os.path.exists(path):
+            mode = os.stat(path).st_mode & 0o7777
+        else:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(tmp, mode)
         mi.Bitmap(img, mi.Bitmap.PixelFormat.RGBA).write(tmp)
         os.replace(tmp, path)
-    except Exception:
-        if os.path.exists(tmp):
+    except BaseException:
+        if os.path.lexists(tmp):
             os.remove(tmp)
         raise
 
@@ -566,6 +589,8 @@ def main(argv=None):
         folder = os.path.dirname(os.path.abspath(args.out))
         if not os.path.isdir(folder) or os.path.isdir(args.out):
             raise UserError("--out: %r: its folder does not exist or it is a folder" % args.out[:200])
+        if os.path.exists(args.out) and not os.path.isfile(args.out):
+            raise UserError("--out: %r is not a regular file (a device, FIFO or socket)" % args.out[:80])
         if args.env is not None:
             if os.path.splitext(args.env)[1].lower() not in (".exr", ".hdr"):
                 raise UserError("--env: %r is not an .exr or .hdr file" % args.env[:200])

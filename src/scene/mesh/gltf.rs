@@ -6,10 +6,15 @@
 //! transform; normals go through the inverse transpose, and a mirroring transform (negative
 //! determinant) has its triangles' winding reversed so they stay counter-clockwise from outside.
 //! `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN` are read; points and lines have no surface and are
-//! left out. Texture coordinates and tangents are not read (tangents follow the rule of docs/model.md, Frames and
-//! conventions).
+//! left out. Texture coordinates and tangents are not read (tangents follow the rule of docs/model.md,
+//! Frames and conventions).
+//!
+//! Untrusted files: the triangles, vertices and primitives the scene expands to (every reuse of an
+//! accessor, mesh or node counted) are checked against the limits before any buffer is read, and an
+//! external buffer must be a regular file inside the glTF file's own folder (docs/formats.md,
+//! Limits and untrusted input).
 
-use std::path::Path;
+use std::path::{Component, Path};
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::buffer::Source;
@@ -98,9 +103,10 @@ struct Loader<'a> {
 }
 
 impl Loader<'_> {
-    /// Walks the scene's node trees depth first, in file order.
+    /// Walks the scene's node trees depth first, in file order, after [`Loader::check_expansion`].
     fn load(&mut self) -> Res<()> {
         let scene = self.doc.default_scene().or_else(|| self.doc.scenes().next()).ok_or("no scene")?;
+        self.check_expansion(&scene)?;
         let node_count = self.doc.nodes().count();
         let mut stack: Vec<(::gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
         stack.reverse();
@@ -123,6 +129,41 @@ impl Loader<'_> {
             }
             let children: Vec<_> = node.children().collect();
             stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        }
+        Ok(())
+    }
+
+    /// Refuses, before any buffer is read, a scene that expands to more than
+    /// [`super::MAX_TRIANGLES`] triangles, [`super::MAX_VERTICES`] vertices or
+    /// [`super::MAX_PRIMITIVE_INSTANCES`] primitives: each node's mesh counts once per node that uses it,
+    /// and each primitive's accessors once per primitive that uses them, from the counts the
+    /// document declares (the data is range checked when read). Costs one pass over the nodes and
+    /// one over the meshes, however often they are reused.
+    fn check_expansion(&self, scene: &::gltf::Scene) -> Res<()> {
+        // Per mesh: (primitives, vertices, triangles) of one instance.
+        let mut per_mesh: Vec<Option<(u64, u64, u64)>> = vec![None; self.doc.meshes().count()];
+        let node_count = self.doc.nodes().count();
+        let mut stack: Vec<::gltf::Node> = scene.nodes().collect();
+        let (mut visits, mut prims, mut verts, mut tris) = (0usize, 0u64, 0u64, 0u64);
+        while let Some(node) = stack.pop() {
+            visits += 1;
+            if visits > node_count {
+                return Err("the node hierarchy is not a tree (a node is reached twice)".into());
+            }
+            if let Some(mesh) = node.mesh() {
+                let (p, v, t) = *per_mesh[mesh.index()].get_or_insert_with(|| mesh_expansion(&mesh));
+                prims = prims.saturating_add(p);
+                verts = verts.saturating_add(v);
+                tris = tris.saturating_add(t);
+                if prims > super::MAX_PRIMITIVE_INSTANCES {
+                    let limit = super::MAX_PRIMITIVE_INSTANCES;
+                    return Err(format!(
+                        "the scene draws {prims} primitives or more (meshes reused by nodes), past the limit of {limit}"
+                    ));
+                }
+                super::check_expansion(verts, tris).map_err(|m| format!("the scene {m}"))?;
+            }
+            stack.extend(node.children());
         }
         Ok(())
     }
@@ -269,6 +310,9 @@ impl Loader<'_> {
     fn buffer(&mut self, i: usize) -> Res<&[u8]> {
         if self.buffers[i].is_none() {
             let buf = self.doc.buffers().nth(i).ok_or_else(|| format!("no buffer {i}"))?;
+            if buf.length() == 0 {
+                return Err(format!("buffer {i}: byteLength 0 (glTF requires at least 1)"));
+            }
             let data: Vec<u8> = match buf.source() {
                 Source::Bin => {
                     self.blob.ok_or_else(|| format!("buffer {i} has no uri and there is no GLB binary chunk"))?.to_vec()
@@ -279,24 +323,7 @@ impl Loader<'_> {
                         .ok_or_else(|| format!("buffer {i}: a data URI that is not base64"))?;
                     base64(b64).ok_or_else(|| format!("buffer {i}: its data URI is not valid base64"))?
                 }
-                Source::Uri(uri) => {
-                    if uri.split('/').next().is_some_and(|s| s.contains(':')) {
-                        return Err(format!("buffer {i}: URI \"{uri}\" is not a relative file path"));
-                    }
-                    let file = self.dir.join(percent_decode(uri));
-                    let len = std::fs::metadata(&file)
-                        .map(|m| m.len())
-                        .map_err(|e| format!("buffer {i}: {}: {e}", file.display()))?;
-                    if len < buf.length() as u64 {
-                        return Err(format!(
-                            "buffer {i}: {} has {len} bytes, {} declared",
-                            file.display(),
-                            buf.length()
-                        ));
-                    }
-                    crate::fsio::read_limited(&file, super::MAX_MESH_FILE_BYTES, "a glTF buffer")
-                        .map_err(|e| format!("buffer {i}: {e}"))?
-                }
+                Source::Uri(uri) => self.external(i, uri, buf.length())?,
             };
             if data.len() < buf.length() {
                 return Err(format!("buffer {i} has {} bytes, {} declared", data.len(), buf.length()));
@@ -304,6 +331,64 @@ impl Loader<'_> {
             self.buffers[i] = Some(data);
         }
         Ok(self.buffers[i].as_deref().unwrap_or(&[]))
+    }
+}
+
+/// One instance of `mesh`: its primitives, and the vertices and triangles of those with triangles,
+/// as their accessors declare them (saturating: the limits refuse the sum).
+fn mesh_expansion(mesh: &::gltf::Mesh) -> (u64, u64, u64) {
+    let (mut prims, mut verts, mut tris) = (0u64, 0u64, 0u64);
+    for prim in mesh.primitives() {
+        prims += 1;
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            continue;
+        }
+        let n = prim.get(&Semantic::Positions).map_or(0, |a| a.count() as u64);
+        let order = prim.indices().map_or(n, |a| a.count() as u64);
+        verts = verts.saturating_add(n);
+        tris = tris.saturating_add(match mode {
+            Mode::Triangles => order / 3,
+            _ => order.saturating_sub(2),
+        });
+    }
+    (prims, verts, tris)
+}
+
+impl Loader<'_> {
+    /// An external buffer file: `uri` (percent-decoded) must name a regular file inside the glTF
+    /// file's folder. Refused without touching the file system: a URI with a scheme, an absolute
+    /// path, a `..` component. Refused with one message that says nothing of what is there: a path
+    /// that does not resolve (after symlinks) to a file inside the folder. A FIFO, device or socket
+    /// is refused before it is opened ([`crate::fsio::read_regular_limited`]).
+    fn external(&self, i: usize, uri: &str, declared: usize) -> Res<Vec<u8>> {
+        let shown = crate::fsio::quote(uri);
+        if uri.split('/').next().is_some_and(|s| s.contains(':')) {
+            return Err(format!("buffer {i}: URI \"{shown}\" is not a relative file path"));
+        }
+        let decoded = percent_decode(uri);
+        let rel = Path::new(&decoded);
+        let escapes = decoded.contains('\0')
+            || decoded.contains('\\')
+            || rel.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir));
+        let outside =
+            || format!("buffer {i}: URI \"{shown}\" leads out of the glTF file's folder (buffers are files beside it)");
+        if escapes {
+            return Err(outside());
+        }
+        let unreadable = || format!("buffer {i}: URI \"{shown}\" is not a readable file in the glTF file's folder");
+        let dir = if self.dir.as_os_str().is_empty() { Path::new(".") } else { self.dir };
+        let folder = std::fs::canonicalize(dir).map_err(|_| unreadable())?;
+        let file = std::fs::canonicalize(folder.join(rel)).map_err(|_| unreadable())?;
+        if !file.starts_with(&folder) || file == folder {
+            return Err(unreadable());
+        }
+        let data = crate::fsio::read_regular_limited(&file, super::MAX_MESH_FILE_BYTES)
+            .map_err(|e| format!("buffer {i}: URI \"{shown}\": {e}"))?;
+        if data.len() < declared {
+            return Err(format!("buffer {i}: URI \"{shown}\" has {} bytes, {declared} declared", data.len()));
+        }
+        Ok(data)
     }
 }
 

@@ -25,6 +25,33 @@ pub use closure::Hidden;
 /// memory at worst (OBJ text → positions, indices, normals), so 256 MiB keeps a load within a few GB.
 pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
 
+/// The most triangles a mesh file may expand to, counted before anything of that size is allocated
+/// (in glTF, every reuse of an accessor, mesh or node counts again): 16 × the benchmark's largest
+/// mesh (1 M triangles). At the limit the indices alone take 192 MiB, the loaders, the reference
+/// renderer's ray-casting structure and the GPU buffers a few times that.
+pub const MAX_TRIANGLES: u64 = 1 << 24;
+
+/// The most vertices a mesh file may expand to (counted like [`MAX_TRIANGLES`]): as many as
+/// triangles, 24 bytes each (position and normal) and about as much again while loading.
+pub const MAX_VERTICES: u64 = 1 << 24;
+
+/// The most primitives a glTF scene may draw, counting a mesh once per node that draws it: a million,
+/// far past any real scene, so that a file reusing a mesh of many empty primitives (points, no
+/// triangles) cannot make the loader walk them for hours.
+pub const MAX_PRIMITIVE_INSTANCES: u64 = 1 << 20;
+
+/// Refuses `vertices` or `triangles` past [`MAX_VERTICES`] / [`MAX_TRIANGLES`], the message naming
+/// the limit.
+pub(crate) fn check_expansion(vertices: u64, triangles: u64) -> std::result::Result<(), String> {
+    if triangles > MAX_TRIANGLES {
+        return Err(format!("expands to {triangles} triangles or more, past the limit of {MAX_TRIANGLES}"));
+    }
+    if vertices > MAX_VERTICES {
+        return Err(format!("expands to {vertices} vertices or more, past the limit of {MAX_VERTICES}"));
+    }
+    Ok(())
+}
+
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub name: String,
@@ -196,6 +223,7 @@ impl Mesh {
         if indices.is_empty() || indices.len() % 3 != 0 {
             return Err(Error::input(origin, "no triangles"));
         }
+        check_expansion(positions.len() as u64, indices.len() as u64 / 3).map_err(|m| Error::input(origin, m))?;
         if let Some(k) = indices.iter().position(|&i| i as usize >= positions.len()) {
             let what = format!("triangle {} uses vertex {} of {}", k / 3, indices[k], positions.len());
             return Err(Error::input(origin, what));

@@ -79,6 +79,9 @@ pub(crate) fn surfaces_only(bytes: &[u8]) -> std::result::Result<Vec<u8>, String
         }
     }
     let mut seen = [0usize; 3];
+    // The triangles tobj will make of the faces, before it allocates anything: a polygon of n
+    // vertices is n − 2 triangles. (Its vertices, at most three per triangle, are bounded with them.)
+    let mut triangles = 0u64;
     let mut out = Vec::with_capacity(bytes.len());
     for (no, line) in bytes.split(|&b| b == b'\n').enumerate() {
         let w = words(line);
@@ -88,6 +91,14 @@ pub(crate) fn surfaces_only(bytes: &[u8]) -> std::result::Result<Vec<u8>, String
                 let n = w.len() - 1;
                 if n < 3 {
                     return Err(format!("line {}: a face needs at least three vertices, got {n}", no + 1));
+                }
+                triangles += n as u64 - 2;
+                if triangles > super::MAX_TRIANGLES {
+                    let limit = super::MAX_TRIANGLES;
+                    return Err(format!(
+                        "line {}: expands to {triangles} triangles, past the limit of {limit}",
+                        no + 1
+                    ));
                 }
                 for vertex in &w[1..] {
                     for (k, index) in vertex.split(|&b| b == b'/').enumerate().take(3) {

@@ -1,8 +1,9 @@
 //! PLY (Stanford polygon file), ASCII and binary (little and big endian), read by hand: the header's
 //! elements and properties, then the `vertex` element's `x y z` (any scalar type) and optional
 //! `nx ny nz`, and the `face` element's `vertex_indices` (or `vertex_index`) list, polygons
-//! fan-triangulated. Other elements and properties are read past. Every count the header declares is
-//! checked against the bytes that follow it before anything is allocated.
+//! fan-triangulated. Other elements and properties (a second `vertex` or `face` element among them)
+//! are read past. Every count the header declares is checked against the bytes that follow it before
+//! anything is allocated, and the vertices and triangles against `MAX_VERTICES` / `MAX_TRIANGLES`.
 
 use std::path::Path;
 
@@ -268,7 +269,11 @@ fn read_ply(bytes: &[u8]) -> std::result::Result<Parts, String> {
             ));
         }
     }
-    let vertex = elements.iter().find(|e| e.name == "vertex").ok_or("no vertex element")?;
+    // The first `vertex` and the first `face` element are the mesh; any later element of either
+    // name is read past like any other element.
+    let vertex_at = elements.iter().position(|e| e.name == "vertex").ok_or("no vertex element")?;
+    let face_at = elements.iter().position(|e| e.name == "face");
+    let vertex = &elements[vertex_at];
     let scalar = |name: &str| vertex.props.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_)));
     let (Some(x), Some(y), Some(z)) = (scalar("x"), scalar("y"), scalar("z")) else {
         return Err("the vertex element has no scalar x, y and z properties".into());
@@ -277,26 +282,25 @@ fn read_ply(bytes: &[u8]) -> std::result::Result<Parts, String> {
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
         _ => None,
     };
+    super::check_expansion(vertex.count, 0)?;
     let vertex_count = vertex.count as usize;
-    if vertex_count > u32::MAX as usize {
-        return Err(format!("{} vertices: more than 2^32", vertex.count));
-    }
     let mut body = Body { data: &bytes[start..], pos: 0, format, line: 1 };
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut indices = Vec::new();
     let mut saw_faces = false;
     let mut values = Vec::new();
-    for e in &elements {
-        let is_vertex = e.name == "vertex";
-        let face_list = (e.name == "face")
+    for (ei, e) in elements.iter().enumerate() {
+        let is_vertex = ei == vertex_at;
+        let is_face_element = Some(ei) == face_at;
+        let face_list = is_face_element
             .then(|| {
                 e.props.iter().position(|p| {
                     (p.name == "vertex_indices" || p.name == "vertex_index") && matches!(p.kind, Kind::List(..))
                 })
             })
             .flatten();
-        if e.name == "face" {
+        if is_face_element {
             let Some(k) = face_list else {
                 return Err("the face element has no vertex_indices (or vertex_index) list".into());
             };
@@ -344,6 +348,8 @@ fn read_ply(bytes: &[u8]) -> std::result::Result<Parts, String> {
                         }
                         if is_face {
                             // Fan triangulation; a face of fewer than three vertices has no area.
+                            let adds = polygon.len().saturating_sub(2) as u64;
+                            super::check_expansion(0, (indices.len() / 3) as u64 + adds).map_err(at)?;
                             for w in 1..polygon.len().saturating_sub(1) {
                                 indices.extend_from_slice(&[polygon[0], polygon[w], polygon[w + 1]]);
                             }
