@@ -72,7 +72,9 @@ pub fn check_size(size: (u32, u32)) -> Result<()> {
 /// formats, before any window opens.
 pub fn parse_export(text: &str) -> Result<(Format, PathBuf)> {
     let known: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
-    let refuse = |what: String| Error::input("--export", format!("{what} (expected FORMAT=PATH, FORMAT one of {})", known.join(", ")));
+    let refuse = |what: String| {
+        Error::input("--export", format!("{what} (expected FORMAT=PATH, FORMAT one of {})", known.join(", ")))
+    };
     let Some((name, path)) = text.split_once('=') else {
         return Err(refuse(format!("\"{}\" has no '='", crate::fsio::quote(text))));
     };
