@@ -755,14 +755,21 @@ fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validat
 
 /// *Export…* through a scripted session (`--export FORMAT=PATH`, the button's code path): every
 /// format of `export::Format::ALL` is written with the same bytes as `brdf-shop export` writes from
-/// the saved `--out` material; an export into a folder that does not exist is one status line on
-/// stderr, writes nothing, and the session goes on to the exports after it, the screenshot and `--out`.
+/// the saved `--out` material `m.brdf.json` (each into `<editor|cli>/<format>/m.<extension>`: a format
+/// that names what it makes names it `m` either way); an export into a folder that does not exist is
+/// one status line on stderr, writes nothing, and the session goes on to the exports after it, the
+/// screenshot and `--out`.
 #[test]
 fn export_from_the_editor_writes_what_the_export_command_writes() {
     use brdf_shop::export::Format;
     let dir = tempfile::TempDir::new().unwrap();
     let d = |n: &str| dir.path().join(n);
-    let file = |f: Format, from: &str| d(&format!("{from}-{}.{}", f.name(), f.extension()));
+    let file = |f: Format, from: &str| d(from).join(f.name()).join(format!("m.{}", f.extension()));
+    for f in Format::ALL {
+        for from in ["editor", "cli"] {
+            std::fs::create_dir_all(file(f, from).parent().unwrap()).unwrap();
+        }
+    }
     let bin = env!("CARGO_BIN_EXE_brdf-shop");
     let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let missing = d("no-such-folder").join("m.glsl");
@@ -805,17 +812,24 @@ fn export_from_the_editor_writes_what_the_export_command_writes() {
         assert!(!a.is_empty() && a == b, "{}: the editor's export differs from the export command's", f.name());
     }
     // Nothing else was left behind (no temporary files of the atomic writes).
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    let mut expected: Vec<String> = ["m.brdf.json", "recovery.brdf.json", "shot.png"].map(String::from).to_vec();
+    let names = |p: &Path| -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(p).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(dir.path()), ["cli", "editor", "m.brdf.json", "recovery.brdf.json", "shot.png"]);
     for f in Format::ALL {
         for from in ["editor", "cli"] {
-            expected.push(file(f, from).file_name().unwrap().to_string_lossy().into_owned());
+            let file = file(f, from);
+            assert_eq!(
+                names(file.parent().unwrap()),
+                [file.file_name().unwrap().to_string_lossy()],
+                "{from}, {}",
+                f.name()
+            );
         }
     }
-    expected.sort();
-    assert_eq!(names, expected);
     let img = image::open(d("shot.png")).expect("a PNG").to_rgba8();
     assert_eq!(img.dimensions(), (480, 320));
     assert!(spread(&img, (0, 0, 240, 320)) > 2.0, "the mesh view of the screenshot looks empty");
