@@ -883,3 +883,30 @@ fn the_export_dialog_offers_the_material_name_with_the_format_extension() {
     d.choose(Format::ALL[0]);
     assert_eq!(d.path, "elsewhere/named-by-hand");
 }
+
+/// The panel's verdict line names what breaks physical correctness: nothing for a material of the
+/// reciprocal model, "energy bound broken" for a Ward (eq. 1) lobe whose albedo passes 1 near grazing
+/// (α 0.5, albedo 1: tests/model.rs measures the excess), "not reciprocal" for a rotated lobe of the
+/// paper's model (its rotation is applied to the view only).
+#[test]
+fn the_panel_verdict_names_what_breaks_physical_correctness() {
+    use brdf_shop::brdf::energy::Report;
+    use brdf_shop::brdf::{Lobe, Normalization};
+    use brdf_shop::editor::panel::broken;
+    let mut reciprocal = Material::scratch();
+    reciprocal.lobes.push(Lobe::isotropic([0.4; 3], 0.1));
+    assert_eq!(broken(&Report::measure(&reciprocal, 2_000, 1_000)), None);
+    let ward = Material {
+        diffuse: [0.0; 3],
+        normalization: Normalization::Ward,
+        symmetrize: false,
+        lobes: vec![Lobe::isotropic([1.0; 3], 0.5)],
+    };
+    assert_eq!(broken(&Report::measure(&ward, 20_000, 1_000)).as_deref(), Some("energy bound broken"));
+    let mut rotated = Material::scratch_paper();
+    let mut lobe = Lobe::isotropic([0.4; 3], 0.1);
+    lobe.rotation = glam::DQuat::from_axis_angle(glam::DVec3::X, 0.6);
+    rotated.lobes.push(lobe);
+    let verdict = broken(&Report::measure(&rotated, 2_000, 1_000));
+    assert!(verdict.as_deref().is_some_and(|v| v.starts_with("not reciprocal")), "{verdict:?}");
+}
