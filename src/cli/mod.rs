@@ -108,6 +108,10 @@ enum Command {
         /// user would; a file that does not load is a status line and the session goes on.
         #[arg(long)]
         drop: Vec<PathBuf>,
+        /// After the replay and the drops, export the material as the Export… button does (FORMAT: a
+        /// `brdf-shop export` format); a failed export is a status line and the session goes on.
+        #[arg(long, value_name = "FORMAT=PATH")]
+        export: Vec<String>,
         /// On exit, write per-frame statistics as JSON: wall ms, GPU ms per pass, interaction or
         /// refinement frame, and the medians of each kind.
         #[arg(long)]
@@ -257,6 +261,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             material,
             replay,
             drop,
+            export,
             frame_stats,
             screenshot,
             out,
@@ -267,6 +272,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             size,
             frame_budget,
         }) => {
+            let export = export.iter().map(|e| brdf_shop::editor::parse_export(e)).collect::<Result<Vec<_>, _>>()?;
             let size = scene::parse_size(&size)?;
             if let Some(ms) = frame_budget {
                 brdf_shop::editor::check_frame_budget(ms)?;
@@ -288,6 +294,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 material,
                 replay,
                 drop,
+                export,
                 frame_stats,
                 screenshot,
                 out,

@@ -8,7 +8,7 @@ use super::preview::{self, CanvasStep, MeshStep, Preview};
 use super::state::Input;
 use super::stats::FrameKind;
 use super::view::{Plan, Shown};
-use super::{graph, panel, report, App, FRAME_RATE_WINDOW, REFINE_MAX, REFINE_STEP};
+use super::{export, graph, panel, report, App, FRAME_RATE_WINDOW, REFINE_MAX, REFINE_STEP};
 use crate::error::Result;
 use crate::render::compose::Placement;
 use crate::render::{Estimator, Progress, Recorded, View};
@@ -197,9 +197,12 @@ impl App {
         let mut actions = panel::Actions::default();
         let curves = &self.curves.as_ref().expect("made above").1;
         let dialog = &mut self.dialog;
+        let export_dialog = &mut self.export_dialog;
         let output = self.egui_ctx.run(raw_input, |ctx| {
             actions = panel::show(ctx, &m, &info, &mut spp, &mut exposure, &mut log_graph);
             panel::dialog(ctx, dialog, &mut actions);
+            export_dialog.open |= std::mem::take(&mut actions.open_export);
+            actions.export = export::show(ctx, export_dialog);
             let ppp = ctx.pixels_per_point();
             let rect = egui::Rect::from_min_max(
                 egui::pos2(l.canvas_x as f32 / ppp, l.graph_y.min(l.height) as f32 / ppp),

@@ -3,7 +3,8 @@
 //! paint with the left button, drag the light with the right, `L` resets it) and the BRDF graph
 //! (lower right; `G` toggles log scale). Brushes: `C` create, `M` modify, `S` streak, `I` intensify,
 //! `D` de-intensify; `P` split lobes on/off; Ctrl+Z / Ctrl+Shift+Z undo/redo; Ctrl+S saves. A
-//! dropped (or *Open…*ed) `.exr`/`.hdr`, mesh or `.brdf.json` file is loaded.
+//! dropped (or *Open…*ed) `.exr`/`.hdr`, mesh or `.brdf.json` file is loaded; *Export…* writes the
+//! material in any format `brdf-shop export` writes (`export`).
 //!
 //! The layout: `handler` turns winit events into [`state::Input`]s, which [`state::State`] handles
 //! (`--replay` feeds the same inputs from a strokes file); this module owns the session (window,
@@ -12,6 +13,7 @@
 //! `view` renders, composes and presents on the GPU with frames in flight; `recovery` keeps unsaved
 //! work; `stats` records frame times.
 
+pub mod export;
 mod frame;
 pub mod graph;
 pub mod handler;
@@ -47,7 +49,7 @@ use stats::{FrameKind, FrameStat};
 use view::Gpu;
 
 use lighting::{light_from, EnvSummary};
-pub use options::{check_frame_budget, check_size, clamp_to_display, Options, MAX_WINDOW_SIDE};
+pub use options::{check_frame_budget, check_size, clamp_to_display, parse_export, Options, MAX_WINDOW_SIDE};
 
 struct App {
     opts: Options,
@@ -116,6 +118,8 @@ struct App {
     panel_dragging: bool,
     /// The *Open…* / *Save as…* dialog's path field, while it is open.
     dialog: Option<panel::Dialog>,
+    /// The *Export…* dialog (its last format and path are kept while it is closed).
+    export_dialog: export::Dialog,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -214,6 +218,7 @@ impl App {
             }
         }
         self.pending.extend(self.opts.drop.iter().cloned().map(Input::Dropped));
+        self.pending.extend(self.opts.export.iter().cloned().map(|(f, p)| Input::Export(f, p)));
         self.window_script.extend(self.opts.resize.iter().map(|&(w, h)| WindowStep::Resize(w, h)));
         if self.opts.minimise {
             self.window_script.extend([WindowStep::Minimise(true), WindowStep::Minimise(false)]);
@@ -264,6 +269,12 @@ impl App {
                 Err(e) if e.is_user_error() => format!("not saved: {e}"),
                 Err(e) => return Err(e),
             };
+        }
+        if let Some((format, path)) = fx.export {
+            // As the *Export…* button does: a status line, on stderr too (scripted sessions).
+            let line = export::export(state.material(), format, &path);
+            eprintln!("brdf-shop: {}", crate::fsio::escape_controls(&line));
+            state.status = line;
         }
         if let Some(p) = fx.load {
             // So is a file that does not load (broken, unknown kind); a device error is not.
@@ -384,6 +395,9 @@ impl App {
         if let Some(p) = a.save_as {
             self.handle(Input::SaveAs(p))?;
         }
+        if let Some((f, p)) = a.export {
+            self.handle(Input::Export(f, p))?;
+        }
         if let (Some((m, dragging)), Some(state)) = (a.material, self.state.as_mut()) {
             if self.panel_dragging {
                 state.history.amend(m);
@@ -460,6 +474,7 @@ pub fn run(opts: Options) -> Result<()> {
         Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
     })?;
     let budget = opts.frame_budget_ms.unwrap_or(preview::DEFAULT_BUDGET_MS);
+    let export_dialog = export::Dialog::new(opts.out.as_deref().or(opts.material.as_deref()));
     let mut app = App {
         proxy: event_loop.create_proxy(),
         opts,
@@ -501,6 +516,7 @@ pub fn run(opts: Options) -> Result<()> {
         timings: Vec::new(),
         panel_dragging: false,
         dialog: None,
+        export_dialog,
     };
     if app.recovered_material().is_some() {
         eprintln!(

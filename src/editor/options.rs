@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use crate::error::{Error, Result};
+use crate::export::Format;
 
 /// What `brdf-shop edit` was asked to do.
 #[derive(Clone, Debug, Default)]
@@ -13,6 +14,9 @@ pub struct Options {
     pub replay: Option<PathBuf>,
     /// Scripted drops: after the replay, these files are dropped onto the window in order.
     pub drop: Vec<PathBuf>,
+    /// Scripted exports (`--export FORMAT=PATH`): after the replay and the drops, each is made as the
+    /// *Export…* button makes it, its status line on stderr.
+    pub export: Vec<(Format, PathBuf)>,
     /// Write per-frame statistics (wall ms, GPU ms per pass, interaction or refinement) here on exit.
     pub frame_stats: Option<PathBuf>,
     pub screenshot: Option<PathBuf>,
@@ -62,4 +66,24 @@ pub fn check_size(size: (u32, u32)) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Parses an `--export FORMAT=PATH` value; an unknown format (or no `=`) is refused naming the known
+/// formats, before any window opens.
+pub fn parse_export(text: &str) -> Result<(Format, PathBuf)> {
+    let known: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
+    let refuse = |what: String| {
+        Error::input("--export", format!("{what} (expected FORMAT=PATH, FORMAT one of {})", known.join(", ")))
+    };
+    let Some((name, path)) = text.split_once('=') else {
+        return Err(refuse(format!("\"{}\" has no '='", crate::fsio::quote(text))));
+    };
+    let format = Format::ALL
+        .into_iter()
+        .find(|f| f.name() == name)
+        .ok_or_else(|| refuse(format!("unknown format \"{}\"", crate::fsio::quote(name))))?;
+    if path.is_empty() {
+        return Err(refuse(format!("\"{}\" names no file", crate::fsio::quote(text))));
+    }
+    Ok((format, PathBuf::from(path)))
 }

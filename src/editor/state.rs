@@ -12,6 +12,7 @@ use crate::brush::canvas::{normal_at, Canvas};
 use crate::brush::history::History;
 use crate::brush::strokes::{apply, BrushKind, Stroke};
 use crate::brush::Settings;
+use crate::export::Format;
 use crate::scene::Camera;
 
 /// A user action, from the window or synthesised.
@@ -35,6 +36,8 @@ pub enum Input {
     Save,
     /// Save the material to this path (the *Save as…* dialog).
     SaveAs(PathBuf),
+    /// Export the material in this format to this path (the *Export…* dialog, `--export`).
+    Export(Format, PathBuf),
     Resized(u32, u32),
     /// A file dropped on the window or picked in the *Open…* dialog: environment, mesh or material.
     Dropped(PathBuf),
@@ -102,6 +105,8 @@ pub struct Effect {
     /// Save to this path instead of `--out`.
     pub save_as: Option<PathBuf>,
     pub load: Option<PathBuf>,
+    /// Export the material (format, path).
+    pub export: Option<(Format, PathBuf)>,
     /// A stroke that could not be applied, for the status line.
     pub message: Option<String>,
 }
@@ -285,6 +290,7 @@ impl State {
                 fx.redraw = true;
             }
             Input::SaveAs(p) => fx.save_as = Some(p),
+            Input::Export(f, p) => fx.export = Some((f, p)),
             Input::Dropped(p) => fx.load = Some(p),
             Input::ToggleLogGraph => {
                 self.log_graph = !self.log_graph;
