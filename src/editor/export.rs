@@ -37,7 +37,7 @@ pub fn default_path(material: Option<&Path>, format: Format) -> PathBuf {
 pub fn export(m: &Material, format: Format, path: &Path) -> String {
     let written = crate::fsio::check_output(format.name(), path).and_then(|()| crate::export::write(m, format, path));
     match written {
-        Ok(()) => format!("exported {} to {}", format.name(), path.display()),
+        Ok(()) => format!("exported {} to {}", format.name(), crate::fsio::show(path)),
         Err(e) => format!("export failed: {e}"),
     }
 }
