@@ -229,3 +229,16 @@ pub fn read_exr(path: &Path) -> brdf_shop::reference::Image {
     let (w, h, pixels) = img.layer_data.channel_data.pixels;
     brdf_shop::reference::Image { width: w as u32, height: h as u32, pixels }
 }
+
+/// The standard deviation of the luminance over a rectangle of an RGBA image: zero for a clear colour.
+pub fn spread(img: &image::RgbaImage, (x0, y0, w, h): (u32, u32, u32, u32)) -> f64 {
+    let v: Vec<f64> = (y0..y0 + h)
+        .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let p = img.get_pixel(x, y);
+            (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0
+        })
+        .collect();
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
+}
