@@ -228,3 +228,13 @@ pub fn read_exr(path: &Path) -> brdf_shop::reference::Image {
     let (w, h, pixels) = img.layer_data.channel_data.pixels;
     brdf_shop::reference::Image { width: w as u32, height: h as u32, pixels }
 }
+
+/// The Python of a virtual environment tools/setup makes in the cargo target folder
+/// (`<target>/<venv>/bin/python3`, `<target>` being the parent of `CARGO_TARGET_TMPDIR`); a missing
+/// one fails the test, naming what tools/setup installs there.
+pub fn venv_python(venv: &str, what: &str) -> PathBuf {
+    let target = Path::new(env!("CARGO_TARGET_TMPDIR")).parent().unwrap().to_path_buf();
+    let p = target.join(venv).join("bin/python3");
+    assert!(p.exists(), "{} missing: run tools/setup (it installs {what} there)", p.display());
+    p
+}

@@ -1,0 +1,319 @@
+//! `brdf-shop export --format blender` through the real binary and the real Blender module (`bpy`
+//! 5.0.1 from PyPI, installed by tools/setup into `<cargo target folder>/blender-venv`), rendered by
+//! Cycles on the CPU at 64² and compared with `brdf-shop reference` by relative L1 over the object
+//! (over the background for the camera check).
+//!
+//! The export is an approximation (Cycles combines its own closures; docs/exports.md, Blender
+//! (Cycles)), so the tolerances bound its error as measured, per case, with the reason beside each.
+//! The negative checks turn on a fault in the exported script through the test-only environment
+//! variable `BRDF_SHOP_BLENDER_FAULT` (`tangent-90`: every facet tangent turned by 90°;
+//! `inverse-frame`: `Q⁻¹` in place of each facet frame `Q`), read by the script's template
+//! (src/export/blender_material.py), and must fail their tolerance.
+//!
+//! All Cycles renders of a test run in one Python process (tests/blender/batch.py). Run with
+//! `--nocapture` to see the table of measured errors.
+
+// `!(err < bound)` fails on NaN too, which `err >= bound` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use brdf_shop::brdf::{Lobe, Material, Normalization};
+use brdf_shop::reference::{relative_l1, Image};
+use glam::DQuat;
+
+/// The virtual environment tools/setup makes: `<target>/blender-venv`.
+fn python() -> PathBuf {
+    common::venv_python("blender-venv", "Blender's bpy 5.0.1")
+}
+
+fn export(material: &Path, out: &Path) {
+    let (code, _, err) = common::run(&[
+        "export",
+        "--material",
+        material.to_str().unwrap(),
+        "--format",
+        "blender",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "export blender: {err}");
+}
+
+/// Test image size, Cycles samples per pixel and `reference` samples per pixel.
+const SIZE: &str = "64x64";
+const CYCLES_SPP: u32 = 1024;
+const REFERENCE_SPP: u32 = 1024;
+
+fn reference(dir: &Path, material: &Path, env: &Path, out: &Path) {
+    let (code, _, err) = common::run(&[
+        "reference",
+        "--material",
+        material.to_str().unwrap(),
+        "--env",
+        env.to_str().unwrap(),
+        "--mesh",
+        "sphere",
+        "--size",
+        SIZE,
+        "--spp",
+        &REFERENCE_SPP.to_string(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "reference {}: {err}", out.display());
+    let _ = dir;
+}
+
+/// A uniform white environment (the white furnace), 16×8 texels of 1.
+fn constant_env(path: &Path) {
+    exr::prelude::write_rgb_file(path, 16, 8, |_, _| (1.0f32, 1.0f32, 1.0f32)).unwrap();
+}
+
+/// `Σ|a − b| / Σ|b|` over RGB of the pixels neither image covers (the environment seen directly).
+fn background_l1(a: &Image, b: &Image) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        if p[3] < 0.5 && q[3] < 0.5 {
+            for c in 0..3 {
+                num += (p[c] as f64 - q[c] as f64).abs();
+                den += (q[c] as f64).abs();
+            }
+        }
+    }
+    num / den
+}
+
+fn lobe(albedo: f64, ax: f64, ay: f64) -> Lobe {
+    Lobe { albedo: [albedo; 3], alpha_x: ax, alpha_y: ay, ..Lobe::isotropic([albedo; 3], ax) }
+}
+
+fn reciprocal(diffuse: f64, lobes: Vec<Lobe>) -> Material {
+    Material { diffuse: [diffuse; 3], normalization: Normalization::Reciprocal, symmetrize: false, lobes }
+}
+
+/// The furnace materials: one lobe each, isotropic, tilted, split (tilted both ways) and anisotropic.
+fn furnace_materials() -> Vec<(&'static str, Material)> {
+    vec![
+        ("isotropic", reciprocal(0.2, vec![lobe(0.7, 0.2, 0.2)])),
+        ("tilted", reciprocal(0.2, vec![Lobe { rotation: DQuat::from_rotation_x(0.35), ..lobe(0.7, 0.15, 0.15) }])),
+        (
+            "split",
+            reciprocal(0.2, vec![Lobe { rotation: DQuat::from_rotation_x(0.3), split: true, ..lobe(0.7, 0.15, 0.15) }]),
+        ),
+        ("anisotropic", reciprocal(0.2, vec![Lobe { tangent_angle: 0.6, ..lobe(0.7, 0.08, 0.4) }])),
+    ]
+}
+
+/// One comparison: a material under a map, the Cycles job's fault, and its tolerance (`must_fail`:
+/// a negative check, whose error must exceed it).
+struct Case {
+    label: String,
+    material: PathBuf,
+    env: PathBuf,
+    fault: &'static str,
+    tolerance: f64,
+    must_fail: bool,
+    background: bool,
+}
+
+/// Tolerances (relative L1 over the object; the background check over the background). Both
+/// images are Monte Carlo estimates at 64²: Cycles at 1024 spp and `reference` at 1024 spp; their
+/// noise together is measured below 0.5 % on the maps here and below 0.2 % in the furnace.
+/// - camera and background 0.1 %: the same bilinear map seen through the same pixel centres;
+///   a map turned by a texel column or a wrong field of view is several percent.
+/// - diffuse only 1.5 %: Cycles' Lambert closure is brdf-shop's diffuse term exactly; what is left
+///   is noise and the sphere's tessellation (Cycles' 256×128 UV sphere against `reference`'s).
+/// - white furnace 1.5 %: the lookup images match each facet's directional albedo per view, so
+///   only their 48² bilinear resolution and quadrature remain.
+/// - the painted default material 3 % on maps without a dominant small light, 10 % on studio.exr:
+///   under a map the lobe's shape counts, and Cycles' Beckmann closure weights the view toward the
+///   limb differently from brdf-shop's facet lobe; a small bright light makes that visible.
+const CAMERA_TOL: f64 = 0.001;
+const DIFFUSE_TOL: f64 = 0.015;
+const FURNACE_TOL: f64 = 0.015;
+const MAP_TOL: f64 = 0.03;
+const STUDIO_TOL: f64 = 0.10;
+
+#[test]
+fn blender_renders_what_reference_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let hdri = |m: &str| common::asset(&format!("hdri/{m}"));
+    let furnace = d.join("furnace.exr");
+    constant_env(&furnace);
+    let materials = common::export_materials(d);
+    let pick = |n: &str| materials.iter().find(|(name, _)| name == n).unwrap().1.clone();
+    let mut cases = Vec::new();
+    let case = |label: &str, material: PathBuf, env: PathBuf, fault, tolerance, must_fail| Case {
+        label: label.to_string(),
+        material,
+        env,
+        fault,
+        tolerance,
+        must_fail,
+        background: false,
+    };
+    cases.push(Case {
+        background: true,
+        ..case("camera+background (sky)", pick("diffuse-only"), hdri("sky.exr"), "", CAMERA_TOL, false)
+    });
+    cases.push(case("diffuse only (sky)", pick("diffuse-only"), hdri("sky.exr"), "", DIFFUSE_TOL, false));
+    for (name, m) in furnace_materials() {
+        let p = d.join(format!("{name}.brdf.json"));
+        m.save(&p).unwrap();
+        cases.push(case(&format!("furnace {name}"), p.clone(), furnace.clone(), "", FURNACE_TOL, false));
+        if name == "anisotropic" {
+            cases.push(case(&format!("furnace {name}, tangent 90°"), p, furnace.clone(), "tangent-90", FURNACE_TOL, true));
+        } else if name == "tilted" {
+            cases.push(case(&format!("furnace {name}, Q⁻¹ for Q"), p, furnace.clone(), "inverse-frame", FURNACE_TOL, true));
+        }
+    }
+    for (map, tol) in [("sky.exr", MAP_TOL), ("venice.exr", MAP_TOL), ("city.exr", MAP_TOL), ("studio.exr", STUDIO_TOL)] {
+        cases.push(case(&format!("painted default ({map})"), pick("painted-default"), hdri(map), "", tol, false));
+    }
+
+    // Export every material once, then render all the Cycles cases in one process.
+    let mut jobs = Vec::new();
+    let mut outs = Vec::new();
+    for (k, c) in cases.iter().enumerate() {
+        let script = d.join(format!("case{k}.py"));
+        export(&c.material, &script);
+        let out = d.join(format!("case{k}-cycles.exr"));
+        jobs.push(serde_json::json!({
+            "script": script, "fault": c.fault,
+            "args": ["--env", c.env, "--size", SIZE, "--spp", CYCLES_SPP.to_string(), "--out", out],
+        }));
+        outs.push(out);
+    }
+    // The saved .blend reopened renders the same image (the first furnace case: lookup images packed).
+    let furnace_case = cases.iter().position(|c| c.label.starts_with("furnace tilted")).unwrap();
+    let blend = d.join("saved.blend");
+    let (saved_render, reopened) = (d.join("saved.exr"), d.join("reopened.exr"));
+    jobs.push(serde_json::json!({
+        "script": d.join(format!("case{furnace_case}.py")), "fault": "",
+        "args": ["--env", furnace, "--size", "32x32", "--spp", "16", "--save", blend, "--out", saved_render],
+    }));
+    jobs.push(serde_json::json!({"open": blend, "out": reopened}));
+    let job_file = d.join("jobs.json");
+    std::fs::write(&job_file, serde_json::to_string(&jobs).unwrap()).unwrap();
+    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/batch.py");
+    let t = std::time::Instant::now();
+    let out = Command::new(python()).arg(&harness).arg(&job_file).output().unwrap();
+    let cycles_seconds = t.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "batch: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
+    let job_lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("JOB ")).collect();
+    assert_eq!(job_lines.len(), jobs.len(), "{stdout}");
+    for l in &job_lines {
+        assert_eq!(l.split_whitespace().nth(2), Some("0"), "{l}");
+    }
+
+    let t = std::time::Instant::now();
+    let mut failures = Vec::new();
+    println!("blender export accuracy, {SIZE}, Cycles {CYCLES_SPP} spp against reference {REFERENCE_SPP} spp:");
+    println!("  {:44} {:>9} {:>9}  result", "case", "rel. L1", "bound");
+    for (k, c) in cases.iter().enumerate() {
+        let reference_out = d.join(format!("case{k}-reference.exr"));
+        reference(d, &c.material, &c.env, &reference_out);
+        let a = common::read_exr(&outs[k]);
+        let b = common::read_exr(&reference_out);
+        let covered = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p[3] >= 0.5 && q[3] >= 0.5).count();
+        assert!(covered > 64 * 64 / 4, "{}: only {covered} pixels on the object in both", c.label);
+        let err = if c.background { background_l1(&a, &b) } else { relative_l1(&a, &b).unwrap() };
+        let passes = err < c.tolerance;
+        let ok = passes != c.must_fail;
+        let verdict = match (c.must_fail, passes) {
+            (false, true) => "pass",
+            (false, false) => "FAIL",
+            (true, false) => "fails, as it must",
+            (true, true) => "PASSES (must fail)",
+        };
+        println!("  {:44} {:>8.2}% {:>8.2}%  {verdict}", c.label, 100.0 * err, 100.0 * c.tolerance);
+        if !ok {
+            failures.push(format!("{}: {err:.4} against {}", c.label, c.tolerance));
+        }
+    }
+    println!("  (Cycles batch {cycles_seconds:.1} s, reference {:.1} s)", t.elapsed().as_secs_f64());
+
+    // Same seed, same scene, the lookup images read back from the .blend: the same image. Alpha is
+    // the script's coverage in one and Cycles' 1 in the other, so RGB only.
+    let (a, b) = (common::read_exr(&saved_render), common::read_exr(&reopened));
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        for c in 0..3 {
+            num += (p[c] - q[c]).abs() as f64;
+            den += q[c].abs() as f64;
+        }
+    }
+    println!("  saved .blend reopened: relative L1 {:.2e} against its first render", num / den);
+    assert!(num / den < 1e-5, "the reopened .blend renders differently: {:.3e}", num / den);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A material that needs more than 64 closures (Cycles drops the rest without a message) is
+/// refused: one line, exit status 1, nothing written.
+#[test]
+fn blender_export_refuses_more_than_64_closures() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = Material {
+        diffuse: [0.1; 3],
+        lobes: vec![Lobe { split: true, ..lobe(0.02, 0.2, 0.2) }; 32],
+        ..Material::scratch()
+    };
+    let p = dir.path().join("many.brdf.json");
+    m.save(&p).unwrap();
+    let out = dir.path().join("many.py");
+    let (code, _, err) =
+        common::run(&["export", "--material", p.to_str().unwrap(), "--format", "blender", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("65 Cycles closures") && err.contains("64"), "{err}");
+    assert!(!out.exists(), "a refused export wrote a file");
+}
+
+/// The exported script's own refusals: one line, exit status 1, no image written. A paper-model
+/// material is exported with a note.
+#[test]
+fn blender_script_refuses_bad_arguments_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper = dir.path().join("paper.brdf.json");
+    Material { lobes: vec![lobe(0.4, 0.2, 0.2)], ..Material::scratch_paper() }.save(&paper).unwrap();
+    let script = dir.path().join("p.py");
+    let (code, _, err) = common::run(&[
+        "export",
+        "--material",
+        paper.to_str().unwrap(),
+        "--format",
+        "blender",
+        "--out",
+        script.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("approximated twice"), "{err}");
+    assert!(std::fs::read_to_string(&script).unwrap().contains("approximated twice"));
+    let out_exr = dir.path().join("o.exr");
+    let o = out_exr.to_str().unwrap();
+    let missing = dir.path().join("missing.exr");
+    let png = dir.path().join("o.png");
+    let cases: [(Vec<&str>, &str); 7] = [
+        (vec!["--env", missing.to_str().unwrap(), "--out", o], "missing.exr"),
+        (vec!["--env", script.to_str().unwrap(), "--out", o], "--env"),
+        (vec!["--size", "0x5", "--out", o], "--size"),
+        (vec!["--spp", "-3", "--out", o], "--spp"),
+        (vec!["--mesh", "cube", "--out", o], "--mesh"),
+        (vec!["--out", png.to_str().unwrap()], "--out"),
+        (vec!["--frobnicate", "1", "--out", o], "--frobnicate"),
+    ];
+    for (args, needle) in cases {
+        let r = Command::new(python()).arg(&script).args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!out_exr.exists(), "{args:?} wrote an image");
+    }
+}
