@@ -249,14 +249,29 @@ def build_material():
 # ---- The ready scene. ----
 
 
-def sphere_object():
-    import bmesh
+def sphere_object(segments=256, rings=128):
+    """A unit UV sphere about Z (brdf-shop's y axis), smooth-shaded: its interpolated vertex normals
+    stand for the sphere's own normals. (bmesh's sphere operator takes seconds at this size.)"""
+    verts = [(0.0, 0.0, 1.0)]
+    for j in range(1, rings):
+        theta = math.pi * j / rings
+        z, r = math.cos(theta), math.sin(theta)
+        for i in range(segments):
+            phi = 2.0 * math.pi * i / segments
+            verts.append((r * math.cos(phi), r * math.sin(phi), z))
+    verts.append((0.0, 0.0, -1.0))
+    south = len(verts) - 1
 
+    def ring(j, i):
+        return 1 + (j - 1) * segments + i % segments
+
+    faces = [(0, ring(1, i), ring(1, i + 1)) for i in range(segments)]
+    for j in range(1, rings - 1):
+        faces += [(ring(j, i), ring(j + 1, i), ring(j + 1, i + 1), ring(j, i + 1)) for i in range(segments)]
+    faces += [(ring(rings - 1, i + 1), ring(rings - 1, i), south) for i in range(segments)]
     mesh = bpy.data.meshes.new("sphere")
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=256, v_segments=128, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
+    mesh.from_pydata(verts, [], faces)
+    mesh.validate()
     mesh.shade_smooth()
     obj = bpy.data.objects.new("sphere", mesh)
     bpy.context.scene.collection.objects.link(obj)

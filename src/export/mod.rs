@@ -105,3 +105,24 @@ pub fn write_named(material: &Material, format: Format, name: &str, out: &Path) 
     let text = text(material, format, name)?;
     crate::fsio::write_atomic(out, text.as_bytes())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_material_file_names_its_export_without_its_endings() {
+        assert_eq!(name_of(Path::new("/a/painted.brdf.json")), "painted");
+        assert_eq!(name_of(Path::new("metal.json")), "metal");
+        assert_eq!(name_of(Path::new("plain")), "plain");
+        assert_eq!(name_of(Path::new(".brdf.json")), "brdf-shop");
+    }
+
+    #[test]
+    fn every_format_parses_from_its_name() {
+        for f in Format::ALL {
+            assert_eq!(Format::parse(f.name()).unwrap(), f);
+        }
+        assert_eq!(Format::parse("blender").unwrap().extension(), "py");
+    }
+}

@@ -38,7 +38,7 @@ def main():
             module = importlib.util.module_from_spec(spec)
             spec.loader.exec_module(module)
             code = module.main(job["args"])
-        print("JOB %d %d %.2f" % (k, code, time.time() - t), flush=True)
+        print("JOB %d %d %.2f %.2f" % (k, code, time.time() - t, time.process_time()), flush=True)
 
 
 if __name__ == "__main__":
