@@ -253,13 +253,14 @@ mod tests {
         }
     }
 
-    /// At normal view on an untilted facet both models reflect nearly all the light of a rough
-    /// lobe (brdf-shop's albedo ≤ 1, Cycles' ≤ 1) and agree within the masking term.
+    /// At normal view on an untilted facet both models reflect most of the light of a rough lobe:
+    /// Cycles' closure all but its masking loss, brdf-shop's lobe the mean of `cos θ_i` over it
+    /// (its weight `cos θ_i / max(cos θ_i, cos θ_o)` with `cos θ_o = 1`), both at most 1.
     #[test]
     fn albedos_at_normal_view_are_close_to_one() {
         let l = Lobe::isotropic([1.0; 3], 0.2);
         let (ours, cycles) = albedos(&l.shape(), DQuat::IDENTITY, DVec3::Z);
-        assert!(ours <= 1.0 + 1e-9 && ours > 0.95, "{ours}");
+        assert!(ours <= 1.0 + 1e-9 && ours > 0.9, "{ours}");
         assert!(cycles <= 1.0 + 1e-9 && cycles > 0.95, "{cycles}");
     }
 

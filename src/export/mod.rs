@@ -48,7 +48,7 @@ impl Format {
             Format::Mitsuba => "py",
             Format::BrdfExplorer => "brdf",
             Format::Glsl => "glsl",
-            Format::Blender => "blender",
+            Format::Blender => "py",
         }
     }
 
