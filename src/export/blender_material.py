@@ -144,7 +144,7 @@ def lookup_image(name, table):
     for k, v in enumerate(table):
         pixels[4 * k : 4 * k + 3] = (v, v, v)
     img.pixels.foreach_set(pixels)
-    # Packed as 32-bit OpenEXR, so the saved .blend renders what this session renders.
+    # Packed as 32-bit OpenEXR, so a saved and reopened .blend renders the same image.
     img.file_format = "OPEN_EXR"
     img.use_half_precision = False
     img.pack()
