@@ -5,7 +5,7 @@ bpy's start-up is paid once. Argument: a JSON file, a list of jobs:
                                                    BRDF_SHOP_BLENDER_FAULT set to `fault`
     {"open": M.blend, "out": I.exr}                renders a saved .blend as it is (RGB; alpha 1)
 
-Prints one line per job: `JOB k EXIT seconds`.
+Prints one line per job: `JOB k EXIT seconds CPU-seconds-so-far` (the process's, all threads).
 """
 
 import importlib.util
