@@ -20,13 +20,9 @@ use brdf_shop::reference::relative_l1;
 use brdf_shop::rng::Pcg32;
 use glam::DVec3;
 
-/// The virtual environment tools/setup makes: `<target>/mitsuba-venv`, `<target>` being the parent
-/// of cargo's `CARGO_TARGET_TMPDIR` (`<target>/tmp`).
+/// The virtual environment tools/setup makes: `<target>/mitsuba-venv`.
 fn python() -> PathBuf {
-    let target = Path::new(env!("CARGO_TARGET_TMPDIR")).parent().unwrap().to_path_buf();
-    let p = target.join("mitsuba-venv/bin/python3");
-    assert!(p.exists(), "{} missing: run tools/setup (it installs Mitsuba 3 there)", p.display());
-    p
+    common::venv_python("mitsuba-venv", "Mitsuba 3")
 }
 
 fn export_plugin(material: &Path, out: &Path) {

@@ -11,7 +11,10 @@ pub fn run(material: &Path, format: &str, out: &Path) -> anyhow::Result<()> {
     let format = Format::parse(format)?;
     brdf_shop::fsio::check_output("--out", out)?;
     let m = Material::load(material)?;
-    export::write(&m, format, out)?;
+    export::write_named(&m, format, &export::name_of(material), out)?;
     eprintln!("brdf-shop: wrote {} ({})", brdf_shop::fsio::show(out), format.name());
+    if let Some(note) = export::note(&m, format) {
+        eprintln!("brdf-shop: note: {note}");
+    }
     Ok(())
 }

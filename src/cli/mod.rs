@@ -67,12 +67,12 @@ enum Command {
         model: Option<String>,
     },
     /// Write a material for another tool: `mitsuba` (a Mitsuba 3 BSDF plug-in and ready scene, Python),
-    /// `brdf-explorer` (a Disney BRDF Explorer analytic .brdf file) or `glsl` (a self-contained GLSL
-    /// function).
+    /// `brdf-explorer` (a Disney BRDF Explorer analytic .brdf file), `glsl` (a self-contained GLSL
+    /// function) or `blender` (a Cycles material and ready scene, Python).
     Export {
         #[arg(long)]
         material: PathBuf,
-        /// mitsuba, brdf-explorer or glsl.
+        /// mitsuba, brdf-explorer, glsl or blender.
         #[arg(long)]
         format: String,
         #[arg(long)]

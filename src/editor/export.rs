@@ -9,19 +9,10 @@ use std::path::{Path, PathBuf};
 use crate::brdf::Material;
 use crate::export::Format;
 
-/// The name of a material file without its endings: `glossy.brdf.json` → `glossy`, `m.json` → `m`.
+/// The name of a material file without its endings: `glossy.brdf.json` → `glossy`, `m.json` → `m`
+/// (the name `brdf-shop export` gives the material's exports).
 pub fn material_stem(path: &Path) -> String {
-    let name = path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let cut = |end: &str| {
-        let at = name.len().checked_sub(end.len())?;
-        (name.is_char_boundary(at) && name[at..].eq_ignore_ascii_case(end)).then(|| &name[..at])
-    };
-    let stem = cut(".brdf.json").or_else(|| cut(".json")).unwrap_or(&name);
-    if stem.is_empty() {
-        "material".into()
-    } else {
-        stem.into()
-    }
+    crate::export::name_of(path)
 }
 
 /// The path the dialog offers for `format`: `<stem>.<extension>` beside `material` (the file the
@@ -34,10 +25,22 @@ pub fn default_path(material: Option<&Path>, format: Format) -> PathBuf {
 /// Writes `m` in `format` to `path` and returns the status line: `exported F to P`, or `export
 /// failed: ` and the reason (a folder that does not exist, a file that cannot be written, a material
 /// the format cannot express). Every failure is the user's to fix, so none ends the session.
-pub fn export(m: &Material, format: Format, path: &Path) -> String {
-    let written = crate::fsio::check_output(format.name(), path).and_then(|()| crate::export::write(m, format, path));
+///
+/// The export is named after `material_file` (the file the material is saved to) as `brdf-shop
+/// export` names it, else after `path`; a note the format has on the material (a paper-model
+/// material approximated twice in Blender) follows the success line.
+pub fn export(m: &Material, format: Format, path: &Path, material_file: Option<&Path>) -> String {
+    let name = material_file.map_or_else(|| material_stem(path), material_stem);
+    let written = crate::fsio::check_output(format.name(), path)
+        .and_then(|()| crate::export::write_named(m, format, &name, path));
     match written {
-        Ok(()) => format!("exported {} to {}", format.name(), crate::fsio::show(path)),
+        Ok(()) => {
+            let line = format!("exported {} to {}", format.name(), crate::fsio::show(path));
+            match crate::export::note(m, format) {
+                Some(note) => format!("{line} (note: {note})"),
+                None => line,
+            }
+        }
         Err(e) => format!("export failed: {e}"),
     }
 }

@@ -272,7 +272,8 @@ impl App {
         }
         if let Some((format, path)) = fx.export {
             // As the *Export…* button does: a status line, on stderr too (scripted sessions).
-            let line = export::export(state.material(), format, &path);
+            let material_file = self.opts.out.as_deref().or(self.opts.material.as_deref());
+            let line = export::export(state.material(), format, &path, material_file);
             eprintln!("brdf-shop: {}", crate::fsio::escape_controls(&line));
             state.status = line;
         }
