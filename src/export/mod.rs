@@ -117,7 +117,7 @@ mod tests {
 
     #[test]
     fn a_material_file_names_its_export_without_its_endings() {
-        assert_eq!(name_of(Path::new("/a/painted.brdf.json")), "painted");
+        assert_eq!(name_of(Path::new("a/painted.brdf.json")), "painted");
         assert_eq!(name_of(Path::new("metal.json")), "metal");
         assert_eq!(name_of(Path::new("plain")), "plain");
         assert_eq!(name_of(Path::new(".brdf.json")), "material");
