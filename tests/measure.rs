@@ -104,7 +104,33 @@ fn bench_quick_shows_what_a_scene_does_not_need_costs_nothing() {
     }
     let text = bench::table(&rows, "test", peak);
     assert!(text.lines().count() > rows.len(), "{text}");
-    assert!(text.contains("goal (issue 10") && text.contains("G-buffer kept"), "{text}");
+    assert!(text.contains("goal scene") && text.contains("G-buffer kept"), "{text}");
+    // The control row at the start, in the middle and at the end, its verdict in the table; a goal
+    // row at each goal size.
+    let controls: Vec<_> = rows.iter().filter(|m| m.group == "control").collect();
+    assert_eq!(controls.len(), 3, "{:?}", rows.iter().map(|m| &m.label).collect::<Vec<_>>());
+    assert_eq!((rows.first().unwrap().group, rows.last().unwrap().group), ("control", "control"));
+    assert!(text.contains("control rows") && (text.contains("stable") || text.contains("UNSTABLE")), "{text}");
+    let goals: Vec<_> = rows.iter().filter(|m| m.group == "goal").map(|m| m.label.as_str()).collect();
+    assert_eq!(goals, ["96x96 key", "160x90 key"]);
+    // Every row's whole frame holds its passes (1 ns slack for each tick's rounding).
+    for m in &rows {
+        assert!(m.frame.0 > 0.0 && m.frame.0 + 1e-6 >= m.total.0 && m.untimed.0 >= 0.0, "{}: {:?}", m.label, m);
+    }
+}
+
+/// The bench's stability rule at its edge: control rows 4.9 % apart are stable, 5.1 % apart are
+/// not (in any order, with a median between), and a row that timed nothing makes a run unstable.
+#[test]
+fn control_rows_within_five_percent_are_stable() {
+    use brdf_shop::measure::control::stability;
+    assert!(stability(&[1.0, 1.049]).stable);
+    assert!(stability(&[1.049, 1.02, 1.0]).stable);
+    assert!(!stability(&[1.0, 1.051]).stable);
+    assert!(!stability(&[1.051, 1.02, 1.0]).stable);
+    assert!((stability(&[2.0, 2.098]).spread - 0.049).abs() < 1e-12);
+    assert!(stability(&[3.0]).stable, "one control row: nothing to compare");
+    assert!(!stability(&[1.0, 0.0]).stable && !stability(&[1.0, f64::NAN]).stable);
 }
 
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
@@ -236,6 +262,27 @@ fn commands_run_through_the_binary() {
     assert!(text.contains("per lobe") && text.contains("scalar"), "{text}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["configurations"].as_array().unwrap().len() > 5);
+    // The run's verdict, the device, its driver, and the clocks (none on lavapipe: not NVIDIA's).
+    assert!(v["stable"].is_boolean() && v["control_frame_ms"].as_array().unwrap().len() == 3, "{v}");
+    assert!(text.contains("control rows"), "{text}");
+    assert!(!v["device"].as_str().unwrap().is_empty());
+    let driver = &v["driver"];
+    assert!(!driver["name"].as_str().unwrap().is_empty() && driver["info"].is_string(), "{driver}");
+    assert!(driver["version"].as_str().unwrap().contains('.'), "{driver}");
+    assert!(v.get("clocks").is_some_and(|c| c.is_null() || c["start"]["sm_mhz"].is_u64()), "{v}");
+    for c in v["configurations"].as_array().unwrap() {
+        for k in ["total_ms", "frame_ms", "untimed_ms"] {
+            assert!(c[k]["median"].as_f64().is_some(), "{k}: {c}");
+        }
+    }
+    let goal_sizes: Vec<&str> = v["configurations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["group"] == "goal")
+        .map(|c| c["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(goal_sizes, ["96x96 key", "160x90 key"]);
     let md = dir.path().join("stability.md");
     let text = run(&["report", "stability", "--quick", "--out", md.to_str().unwrap()]);
     assert!(text.contains("NaN/Inf") && md.exists(), "{text}");

@@ -3,6 +3,7 @@
 //! and plots; each has a `quick` setting the tests run on lavapipe.
 
 pub mod bench;
+pub mod control;
 pub mod error_vs_time;
 pub mod plot;
 pub mod stability;

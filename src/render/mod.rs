@@ -321,7 +321,10 @@ impl Renderer {
                 self.readback = Some(readback::buffer_for(&self.ctx, &targets.accum)?);
             }
             let targets = self.views[settings.view as usize].as_ref().expect("made by record");
-            let cmd = self.ring.as_ref().expect("ring lives until drop").current_ref().cmd;
+            let frame = self.ring.as_mut().expect("ring lives until drop").current();
+            let cmd = frame.cmd;
+            // The frame's time ends with its passes: the readback copy is the tool's, not the frame's.
+            frame.timestamps.end_frame(&self.ctx, cmd);
             let buffer = self.readback.as_ref().expect("made above");
             readback::record(&self.ctx, cmd, &targets.accum, vk::ImageLayout::GENERAL, buffer);
             Ok(())
@@ -331,10 +334,11 @@ impl Renderer {
             return Err(e);
         }
         self.submit_frame(None, None)?;
-        let timings = self.ring.as_mut().expect("ring lives until drop").wait(&self.ctx)?;
+        let times = self.ring.as_mut().expect("ring lives until drop").wait(&self.ctx)?;
         let pixels = readback::pixels(self.readback.as_ref().expect("made above"));
         self.ctx.check_validation()?;
-        Ok(Frame { image: Image { width: settings.width, height: settings.height, pixels }, timings })
+        let image = Image { width: settings.width, height: settings.height, pixels };
+        Ok(Frame { image, timings: times.passes, frame_ms: times.frame_ms })
     }
 
     /// Reads the mesh view back as it is shown: the refinement's mean when refining, else its last
