@@ -26,9 +26,11 @@ pub mod lobe;
 pub mod mesh;
 pub mod mis;
 pub mod peak;
+pub mod plan;
 mod record;
 mod settings;
 pub mod targets;
+pub mod zero;
 
 use ash::vk;
 use glam::DVec3;
@@ -61,6 +63,7 @@ struct Passes {
     eval: eval::EvalPass,
     accumulate: accumulate::AccumulatePass,
     compose: compose::ComposePass,
+    zero: zero::ZeroPass,
 }
 
 impl Passes {
@@ -77,6 +80,7 @@ impl Passes {
             eval: eval::EvalPass::new(ctx)?,
             accumulate: accumulate::AccumulatePass::new(ctx)?,
             compose: compose::ComposePass::new(ctx)?,
+            zero: zero::ZeroPass::new(ctx)?,
         })
     }
 
@@ -92,6 +96,7 @@ impl Passes {
         self.eval.destroy(ctx);
         self.accumulate.destroy(ctx);
         self.compose.destroy(ctx);
+        self.zero.destroy(ctx);
     }
 }
 
@@ -138,6 +143,9 @@ pub struct Renderer {
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
+    /// How frames start and zero their images on this device (`plan::FramePlan::from_env`); a test
+    /// forces the GPU plan on lavapipe and compares the images.
+    pub frame_plan: plan::FramePlan,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -191,6 +199,7 @@ impl Renderer {
             any_output_lobes: false,
             stratified_shifts: true,
             seed: 0,
+            frame_plan: plan::FramePlan::from_env(ctx.device.kind),
             build_in_background: None,
             passes: Some(passes),
             env: None,
