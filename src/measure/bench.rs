@@ -262,12 +262,8 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
     }
     r.finish_frames()?;
     r.ctx.check_validation()?;
-    let frames: Vec<FrameTimes> = r
-        .take_finished()
-        .into_iter()
-        .skip(2)
-        .map(|f| FrameTimes { passes: f.timings, frame_ms: f.frame_ms })
-        .collect();
+    let frames: Vec<FrameTimes> =
+        r.take_finished().into_iter().skip(2).map(|f| FrameTimes { passes: f.timings, frame_ms: f.frame_ms }).collect();
     if frames.iter().any(|f| f.passes.iter().any(|t| t.name == "gbuffer")) {
         return Err(crate::Error::input("bench", "a frame with the camera unchanged rasterised its G-buffer again"));
     }

@@ -22,7 +22,13 @@ impl ZeroPass {
 
     /// Zeroes `images` (one or two RGBA32F storage images of one size) in `GENERAL`, ready for the
     /// passes that read and add into them.
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, pool: vk::DescriptorPool, images: &[&Image]) -> Result<()> {
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        pool: vk::DescriptorPool,
+        images: &[&Image],
+    ) -> Result<()> {
         let (first, second) = match images {
             [a] => (*a, None),
             [a, b] => (*a, Some(*b)),

@@ -74,9 +74,8 @@ impl PipelineCache {
     /// A cache started from the file at `path` where the file is this device's, else empty; saved
     /// there by [`PipelineCache::save`]. Never fails: a cache that cannot be created is null.
     pub fn open(device: &Device, path: &Path) -> PipelineCache {
-        let bytes = crate::fsio::read_limited(path, MAX_BYTES, "a pipeline cache")
-            .ok()
-            .filter(|b| header_matches(b, device));
+        let bytes =
+            crate::fsio::read_limited(path, MAX_BYTES, "a pipeline cache").ok().filter(|b| header_matches(b, device));
         let mut cache = PipelineCache { raw: vk::PipelineCache::null(), path: Some(path.to_path_buf()), loaded: None };
         if let Some(b) = bytes {
             if let Ok(raw) = create(device, &b) {
