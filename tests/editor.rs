@@ -155,7 +155,14 @@ fn idle_frames_refine_the_mesh_view() {
         }
         let sum: f64 = passes.iter().map(|p| p["ms"].as_f64().unwrap()).sum();
         assert!((sum - gpu).abs() <= 1e-9 * gpu, "{f}");
+        // The whole frame holds its passes (1 ns slack for each tick's rounding); the untimed part
+        // is the difference.
+        let (frame, untimed) = (f["frame_ms"].as_f64().unwrap(), f["untimed_ms"].as_f64().unwrap());
+        assert!(frame > 0.0 && frame + 1e-6 >= gpu, "{f}");
+        assert!((untimed - (frame - gpu).max(0.0)).abs() < 1e-9, "{f}");
     }
+    assert!(doc["refinement"]["median_frame_ms"].as_f64().unwrap() > 0.0, "{doc}");
+    assert!(doc["refinement"]["median_untimed_ms"].as_f64().is_some(), "{doc}");
     assert_eq!(doc["views"]["mesh"]["refined_spp"], 1024);
     assert_eq!(doc["size"], serde_json::json!([256, 144]));
     assert_eq!(doc["refinement"]["frames"], 64);

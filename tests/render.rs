@@ -1334,3 +1334,55 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
     r.ctx.check_validation().unwrap();
     assert!(failures.is_empty(), "{failures:?}");
 }
+
+/// The GPU frame plan (`render::plan::FramePlan::GPU`: the compact pass starts every pixel, the
+/// filter's images zeroed by a compute pass, a kept G-buffer's background and diffuse image drawn
+/// again instead of copied), forced on lavapipe, draws the CPU plan's images. Frames that keep the
+/// G-buffer match bit for bit (both plans draw the kept image in the compact pass, or copy what it
+/// drew; zeros are zeros). A frame that rasterises and filters sparsely adds the diffuse term in the
+/// filter under the CPU plan and in the compact pass under the GPU plan: the same terms summed in
+/// another order. They are radiances (no sign cancels), and the bench material's 4 lobes, diffuse
+/// term and background make at most 6 reassociated additions, each off by at most 1 ulp of the
+/// largest partial sum: 8 ε of the pixel's value bounds the difference.
+#[test]
+fn the_gpu_frame_plan_draws_the_cpu_plans_images() {
+    use brdf_shop::render::plan::FramePlan;
+    let mut r = renderer();
+    r.set_environment(&env("studio.exr")).unwrap();
+    r.set_mesh(&Mesh::sphere()).unwrap();
+    let bench = Material::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench-4lobes.brdf.json")).unwrap();
+    let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
+    for size in [128, 48] {
+        let s = settings(size, 8, Estimator::Key);
+        let sparse = brdf_shop::render::denoise::sparse(8, size, size);
+        assert_eq!(sparse, size == 128, "the cases are a sparse and a dense frame");
+        let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
+        let mut runs = Vec::new();
+        for plan in [FramePlan::CPU, FramePlan::GPU] {
+            r.frame_plan = plan;
+            frame(&mut r, &bench, &moved);
+            let frames = [frame(&mut r, &bench, &s), frame(&mut r, &bench, &s), frame(&mut r, &bench, &s)];
+            runs.push(frames);
+        }
+        r.frame_plan = FramePlan::for_device(r.ctx.device.kind);
+        let [cpu, gpu] = [&runs[0], &runs[1]];
+        let (drawn, kept, restored) = (&gpu[0].0, &gpu[1].0, &gpu[2].0);
+        assert!(has(drawn, "gbuffer") && has(drawn, "zero") && !has(drawn, "background"), "{drawn:?}");
+        assert!(!has(drawn, "denoise[sparse,diffuse]"), "{drawn:?}");
+        for k in [kept, restored] {
+            assert!(has(k, "compact") && !has(k, "base") && !has(k, "base.save") && has(k, "zero"), "{k:?}");
+        }
+        assert!(!cpu.iter().any(|f| has(&f.0, "zero")), "{:?}", cpu[0].0);
+        assert_finite("gpu plan", &gpu[0].1);
+        assert_eq!(gpu[0].1.pixels, gpu[1].1.pixels, "{size}²: the GPU plan's raster and kept frames");
+        assert_eq!(gpu[1].1.pixels, cpu[1].1.pixels, "{size}²: kept frames of both plans");
+        assert_eq!(gpu[2].1.pixels, cpu[2].1.pixels, "{size}²: a recomputed base against a copied one");
+        for (i, (p, q)) in gpu[0].1.pixels.iter().zip(&cpu[0].1.pixels).enumerate() {
+            for c in 0..4 {
+                let bound = 8.0 * f32::EPSILON * p[c].abs().max(q[c].abs());
+                assert!((p[c] - q[c]).abs() <= bound, "{size}²: pixel {i} channel {c}: {} against {}", p[c], q[c]);
+            }
+        }
+    }
+    r.ctx.check_validation().unwrap();
+}

@@ -65,6 +65,13 @@ fn render_writes_exr_png_and_timings() {
     assert_eq!(names[0], "gbuffer", "{names:?}");
     assert!(names[1..].iter().all(|n| n.starts_with("lobe")) && names.len() > 1, "{names:?}");
     assert!(t["passes"].as_array().unwrap().iter().all(|p| p["ms"].as_f64().unwrap() >= 0.0));
+    // The whole frame holds every pass (their timestamps lie between its two, on one clock: 1 ns
+    // slack for the drivers' rounding of each tick), and its untimed part is the difference.
+    let (total, frame, untimed) =
+        (t["total_ms"].as_f64().unwrap(), t["frame_ms"].as_f64().unwrap(), t["untimed_ms"].as_f64().unwrap());
+    assert!(frame + 1e-6 >= total && total > 0.0, "frame {frame} ms, passes {total} ms");
+    assert!((untimed - (frame - total).max(0.0)).abs() < 1e-9, "{untimed} {frame} {total}");
+    assert!(stderr.contains("(whole frame;") && stderr.contains("untimed"), "{stderr}");
     // The default `key` estimator states its decision: studio's lamp, split off, its lobes with lights.
     assert_eq!(t["estimator"], "key");
     let k = &t["key_lights"];

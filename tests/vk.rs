@@ -63,3 +63,54 @@ fn validation_errors_are_caught() {
     let errors = ctx.validation_errors();
     assert!(errors.iter().any(|e| e.contains("VUID-VkBufferCreateInfo-size")), "{errors:?}");
 }
+
+/// The pipeline cache: a pipeline built through it is saved to its file with this device's header;
+/// a second context reads the file and the driver accepts it; a damaged or foreign file is ignored
+/// (the cache starts empty, pipelines still build, and the file is written afresh). The command line
+/// writes the cache under `XDG_CACHE_HOME`, and `BRDF_SHOP_PIPELINE_CACHE=0` writes none.
+#[test]
+fn the_pipeline_cache_is_saved_and_read_back() {
+    use brdf_shop::vk::pipeline_cache::{header_matches, PipelineCache};
+    let dir = tempfile::TempDir::new().unwrap();
+    let path = dir.path().join("sub").join("pipelines.bin");
+    // A context whose cache is the file at `path`, a pipeline built through it, the cache saved.
+    let run = |want_accepted: bool| {
+        let mut ctx = Context::new(true, None).expect("a Vulkan device");
+        let cache = PipelineCache::open(&ctx.device, &path);
+        assert_eq!(cache.accepted(), want_accepted, "{}", path.display());
+        let old = std::mem::replace(&mut *ctx.pipeline_cache, cache);
+        // SAFETY: nothing was built with the replaced cache.
+        unsafe { old.destroy(&ctx.device) };
+        let pass = brdf_shop::render::peak::PeakPass::new(&ctx).expect("a pipeline through the cache");
+        pass.destroy(&ctx);
+        ctx.pipeline_cache.save(&ctx.device).expect("saved");
+        let bytes = std::fs::read(&path).expect("the cache file is written");
+        assert!(header_matches(&bytes, &ctx.device), "{} bytes", bytes.len());
+        assert!(ctx.validation_errors().is_empty(), "{:?}", ctx.validation_errors());
+    };
+    run(false);
+    run(true);
+    // Damaged: not this device's header. Foreign: another pipelineCacheUUID.
+    std::fs::write(&path, b"not a pipeline cache at all, but long enough for a header").unwrap();
+    run(false);
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[20] ^= 0xff;
+    std::fs::write(&path, &bytes).unwrap();
+    run(false);
+    // Through the binary: the user's cache folder, and none when turned off.
+    for (off, want) in [(true, false), (false, true)] {
+        let home = tempfile::TempDir::new().unwrap();
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop"));
+        cmd.args(["render", "--view", "canvas", "--size", "16x16", "--out"])
+            .arg(home.path().join("c.png"))
+            .env("XDG_CACHE_HOME", home.path());
+        if off {
+            cmd.env("BRDF_SHOP_PIPELINE_CACHE", "0");
+        } else {
+            cmd.env_remove("BRDF_SHOP_PIPELINE_CACHE");
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(home.path().join("brdf-shop/pipelines.bin").is_file(), want, "turned off: {off}");
+    }
+}

@@ -31,9 +31,20 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     brdf_shop::measure::require_maps(&plan.hdri, &[bench::ENV])?;
     let mut r = renderer()?;
     brdf_shop::interrupt::install();
+    let vendor = r.ctx.device.info.vendor_id;
+    let clocks_start = brdf_shop::measure::control::clocks(vendor);
     let peak = bench::peak(&r, plan.repeats)?;
     let rows = unless_interrupted(bench::run(&mut r, &plan, true))?;
+    let clocks_end = brdf_shop::measure::control::clocks(vendor);
     print!("{}", bench::table(&rows, r.device_name(), peak));
+    let stability = bench::stability(&rows);
+    if !stability.stable {
+        eprintln!(
+            "warning: unstable run: the control rows' whole-frame medians are {:.1} % apart (more than {:.0} %)",
+            100.0 * stability.spread,
+            100.0 * brdf_shop::measure::control::CONTROL_TOLERANCE
+        );
+    }
     let materials = vec![
         ("default".to_string(), brdf_shop::brush::strokes::default_material()?),
         ("8 lobes".to_string(), bench::material(8)),
@@ -43,6 +54,12 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     print!("{}", viewer::table(&viewer, r.device_name()));
     if let Some(path) = json {
         let mut doc = bench::json(&rows, r.device_name(), &plan, peak);
+        doc["driver"] = bench::driver_json(&r.ctx.device.info);
+        doc["frame_plan"] = serde_json::json!(r.frame_plan.name());
+        doc["clocks"] = match (clocks_start, clocks_end) {
+            (Some(a), Some(b)) => serde_json::json!({ "start": a, "end": b }),
+            _ => serde_json::Value::Null,
+        };
         doc["viewer"] = viewer::json(&viewer);
         let text = serde_json::to_string_pretty(&doc).context("encoding JSON")? + "\n";
         brdf_shop::fsio::write_atomic(path, text.as_bytes())?;

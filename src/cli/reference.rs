@@ -30,7 +30,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     };
     let mut image = image;
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    scene::write_outputs(args, &mut image, "cpu (reference)", &scene, &[("reference".to_string(), ms)], None)?;
+    scene::write_outputs(args, &mut image, "cpu (reference)", &scene, &[("reference".to_string(), ms)], ms, None)?;
     scene::report_env(&scene);
     eprintln!(
         "reference {}x{} at {} spp in {:.1} s; wrote {}",

@@ -26,18 +26,20 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         .then(|| renderer.key_lights())
         .flatten();
     let json = key_lights.map(|k| k.to_json());
-    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, json)?;
-    let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
+    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, frame.frame_ms, json)?;
     scene::report_env(&scene);
     if let Some(k) = key_lights {
         eprintln!("key estimator: {}", k.describe());
     }
     eprintln!(
-        "rendered {}x{} on {} in {total:.3} ms of GPU time ({} passes); wrote {}",
+        "rendered {}x{} on {} in {:.3} ms of GPU time (whole frame; {} passes {:.3} ms, untimed {:.3} ms); wrote {}",
         frame.image.width,
         frame.image.height,
         renderer.device_name(),
+        frame.frame_ms,
         frame.timings.len(),
+        frame.passes_ms(),
+        frame.untimed_ms(),
         brdf_shop::fsio::show(&args.out)
     );
     Ok(())

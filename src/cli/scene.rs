@@ -219,6 +219,7 @@ pub fn write_outputs(
     device: &str,
     scene: &Scene,
     passes: &[(String, f64)],
+    frame_ms: f64,
     key_lights: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
     let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
@@ -226,7 +227,7 @@ pub fn write_outputs(
     let timings = args
         .timings
         .as_ref()
-        .map(|t| timings_json(device, scene, passes, key_lights.clone()).map(|j| (t, j)))
+        .map(|t| timings_json(device, scene, passes, frame_ms, key_lights.clone()).map(|j| (t, j)))
         .transpose()?;
     let mut outputs: Vec<(&Path, &[u8])> = vec![(&args.out, &bytes)];
     if let Some((t, j)) = &timings {
@@ -242,14 +243,18 @@ pub fn write_outputs(
     Ok(())
 }
 
-/// The `--timings` JSON: device, estimator, size, samples, and per pass its name and GPU ms.
+/// The `--timings` JSON: device, estimator, size, samples, per pass its name and GPU ms, their sum
+/// (`total_ms`), the whole frame (`frame_ms`, first command to last) and the part of it no pass
+/// timed (`untimed_ms`).
 fn timings_json(
     device: &str,
     scene: &Scene,
     passes: &[(String, f64)],
+    frame_ms: f64,
     key_lights: Option<serde_json::Value>,
 ) -> anyhow::Result<String> {
     let s = &scene.settings;
+    let total = passes.iter().map(|p| p.1).sum::<f64>() + 0.0;
     let mut json = serde_json::json!({
         "device": device,
         "estimator": s.estimator.name(),
@@ -257,7 +262,9 @@ fn timings_json(
         "size": [s.width, s.height],
         "spp": s.spp,
         "passes": passes.iter().map(|(n, ms)| serde_json::json!({"name": n, "ms": ms})).collect::<Vec<_>>(),
-        "total_ms": passes.iter().map(|p| p.1).sum::<f64>(),
+        "total_ms": total,
+        "frame_ms": frame_ms,
+        "untimed_ms": brdf_shop::vk::query::untimed_ms(frame_ms, total),
     });
     if let Some(k) = key_lights {
         json["key_lights"] = k;

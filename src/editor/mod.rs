@@ -367,8 +367,9 @@ impl App {
             if drawn.kind != FrameKind::Unchanged {
                 // (+ 0.0: the sum of no passes is -0.0.)
                 let gpu_ms = passes.iter().map(|t| t.1).sum::<f64>() + 0.0;
-                let (kind, scale, spp) = (drawn.kind, drawn.scale, drawn.spp);
-                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, kind, scale, spp, passes: passes.clone() });
+                let (kind, scale, spp, frame_ms) = (drawn.kind, drawn.scale, drawn.spp, f.frame_ms);
+                let passes = passes.clone();
+                self.frame_stats.push(FrameStat { wall_ms, gpu_ms, frame_ms, kind, scale, spp, passes });
             }
             self.timings = passes;
         }

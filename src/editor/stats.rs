@@ -24,7 +24,11 @@ pub enum FrameKind {
 /// One frame for `--frame-stats`.
 pub struct FrameStat {
     pub wall_ms: f64,
+    /// The sum of the timed passes.
     pub gpu_ms: f64,
+    /// The whole frame on the GPU, first command to last (the passes, and the clears, copies and
+    /// barriers between them).
+    pub frame_ms: f64,
     pub kind: FrameKind,
     /// The linear scale the frame's changed views were rendered at (1: full size).
     pub scale: f64,
@@ -33,13 +37,22 @@ pub struct FrameStat {
     pub passes: Vec<(String, f64)>,
 }
 
-/// `{"device", "size": [W, H], "frames": [{"kind", "scale", "spp", "wall_ms", "gpu_ms", "passes": [{"name", "ms"}]}],
-/// "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_wall_over_gpu"},
+impl FrameStat {
+    /// The whole frame less its timed passes (`vk::query::untimed_ms`).
+    pub fn untimed_ms(&self) -> f64 {
+        crate::vk::query::untimed_ms(self.frame_ms, self.gpu_ms)
+    }
+}
+
+/// `{"device", "size": [W, H], "frames": [{"kind", "scale", "spp", "wall_ms", "gpu_ms", "frame_ms", "untimed_ms",
+/// "passes": [{"name", "ms"}]}], "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_frame_ms",
+/// "median_untimed_ms", "median_wall_over_gpu", "median_wall_over_frame"},
 /// "settle": {…}, "refinement": {…}, "waiting": {…}, "stand_in": {…}, "skipped_minimised": N, "views": …}` — `waiting`
 /// frames are those whose mesh view waited for a lobe pipeline built in the background, `stand_in` the settle frames
 /// drawn with the other choice's pipelines meanwhile (`FrameKind::StandIn`); `skipped_minimised` counts the redraws
 /// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
-/// canvas and how (camera, exposure, light), so that a headless render can reproduce them.
+/// canvas and how (camera, exposure, light), so that a headless render can reproduce them. `gpu_ms` is the sum of
+/// the timed passes, `frame_ms` the whole frame on the GPU, `untimed_ms` the whole frame less the passes.
 pub fn frame_stats_json(
     device: &str,
     size: (u32, u32),
@@ -62,16 +75,28 @@ pub fn frame_stats_json(
         if wall.is_empty() {
             return json!({ "frames": 0 });
         }
-        let ratio: Vec<f64> =
-            frames.iter().filter(|f| f.kind == k && f.gpu_ms > 0.0).map(|f| f.wall_ms / f.gpu_ms).collect();
+        let whole: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.frame_ms).collect();
+        let untimed: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.untimed_ms()).collect();
+        let ratio = |of: fn(&FrameStat) -> f64| {
+            let r: Vec<f64> = frames.iter().filter(|f| f.kind == k && of(f) > 0.0).map(|f| f.wall_ms / of(f)).collect();
+            if r.is_empty() {
+                0.0
+            } else {
+                crate::measure::stats(&r).0
+            }
+        };
         json!({ "frames": wall.len(), "median_wall_ms": crate::measure::stats(&wall).0,
                 "median_gpu_ms": crate::measure::stats(&gpu).0,
-                "median_wall_over_gpu": if ratio.is_empty() { 0.0 } else { crate::measure::stats(&ratio).0 } })
+                "median_frame_ms": crate::measure::stats(&whole).0,
+                "median_untimed_ms": crate::measure::stats(&untimed).0,
+                "median_wall_over_gpu": ratio(|f| f.gpu_ms),
+                "median_wall_over_frame": ratio(|f| f.frame_ms) })
     };
     let list: Vec<_> = frames
         .iter()
         .map(|f| {
             json!({ "kind": kind_name(f.kind), "scale": f.scale, "spp": f.spp, "wall_ms": f.wall_ms, "gpu_ms": f.gpu_ms,
+                    "frame_ms": f.frame_ms, "untimed_ms": f.untimed_ms(),
                     "passes": f.passes.iter().map(|(n, ms)| json!({ "name": n, "ms": ms })).collect::<Vec<_>>() })
         })
         .collect();

@@ -1,10 +1,14 @@
-//! `bench`: GPU milliseconds per pass (timestamps; median, minimum and maximum of repeated frames)
-//! against lobe count, image size, triangle count and samples per lobe, the estimators (`key`, `fis`,
-//! `plain`, `mis`) on one frame, the `vec4` lobe pass against its scalar loop, and the G-buffer with
-//! hidden faces culled against all faces drawn, and the goal scene (`assets/bench-4lobes.brdf.json`,
-//! `key`, 8 spp), whole frames and frames that keep their G-buffer (group `goal-kept`). Each row states
-//! the lobe passes' cost per pixel-sample and the share of the device's arithmetic peak
-//! (`render::peak`) it reaches. Prints a table; writes JSON on request.
+//! `bench`: GPU milliseconds per pass and per whole frame (timestamps; median, minimum and maximum
+//! of repeated frames) against lobe count, image size, triangle count and samples per lobe, the
+//! estimators (`key`, `fis`, `plain`, `mis`) on one frame, the `vec4` lobe pass against its scalar
+//! loop, the G-buffer with hidden faces culled against all faces drawn, and the goal scene
+//! (`assets/bench-4lobes.brdf.json`, `key`, 8 spp) at the goal sizes, whole frames and frames that
+//! keep their G-buffer (group `goal-kept`). A control row (the goal scene at the control size) runs
+//! at the start, the middle and the end; a run whose control rows disagree by more than
+//! `control::CONTROL_TOLERANCE` is unstable. Every configuration is warmed up (its pipelines built
+//! and run) before its timed frames. Each row states the lobe passes' cost per pixel-sample and the
+//! share of the device's arithmetic peak (`render::peak`) it reaches. Prints a table; writes JSON on
+//! request.
 
 use std::path::PathBuf;
 
@@ -12,7 +16,7 @@ use crate::brdf::{Lobe, Material, Normalization};
 use crate::error::Result;
 use crate::render::{Estimator, Renderer, Settings, View};
 use crate::scene::{Camera, Mesh};
-use crate::vk::query::PassTime;
+use crate::vk::query::FrameTimes;
 
 #[derive(Clone, Debug)]
 pub struct Plan {
@@ -24,10 +28,18 @@ pub struct Plan {
     /// The size of the lobe-count, triangle, spp and vec4 groups.
     pub size: (u32, u32),
     pub repeats: usize,
-    /// The frames of the goal rows (`goal` and `goal-kept`): more than the other rows' `repeats`, so
-    /// that their medians hold through a slow spell of a few frames (on a shared 2-core lavapipe
-    /// machine one 5-frame goal row spanned 38.9–50.8 ms).
+    /// The frames of the goal rows at `size` and of the control rows: more than the other rows'
+    /// `repeats`, so that their medians hold through a slow spell of a few frames (on a shared
+    /// 2-core machine running lavapipe one 5-frame goal row spanned 38.9–50.8 ms).
     pub goal_repeats: usize,
+    /// The sizes of the goal rows, `size` first (the larger ones take `repeats` frames).
+    pub goal_sizes: Vec<(u32, u32)>,
+    /// The size of the control rows (the goal scene, repeated at the start, middle and end).
+    pub control_size: (u32, u32),
+    /// Untimed frames before each configuration's timed ones: the first builds its pipelines (a
+    /// headless frame builds them at once), the others run them, so that a device's clocks have
+    /// settled on the configuration's work before it is timed.
+    pub warmup: usize,
     /// The window sizes of the viewer group (`measure::viewer`: the editor's frame without a window).
     pub viewer_sizes: Vec<(u32, u32)>,
     /// The folder holding [`ENV`] (`--hdri`; see `measure::hdri_dir`).
@@ -48,6 +60,9 @@ impl Plan {
             size: (512, 512),
             repeats: 5,
             goal_repeats: 21,
+            goal_sizes: vec![(512, 512), (1920, 1080), (3840, 2160)],
+            control_size: (512, 512),
+            warmup: 3,
             viewer_sizes: vec![(1280, 720), (1920, 1080), (3840, 2160)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
@@ -62,13 +77,17 @@ impl Plan {
             size: (96, 96),
             repeats: 3,
             goal_repeats: 3,
+            goal_sizes: vec![(96, 96), (160, 90)],
+            control_size: (96, 96),
+            warmup: 1,
             viewer_sizes: vec![(320, 180)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
     }
 }
 
-/// One configuration's times: per pass and in total, each `(median, min, max)` in ms.
+/// One configuration's times: per pass, the passes' sum (`total`), the whole frame (first command to
+/// last) and its untimed part (the whole frame less the passes), each `(median, min, max)` in ms.
 #[derive(Clone, Debug)]
 pub struct Measurement {
     pub group: &'static str,
@@ -76,12 +95,14 @@ pub struct Measurement {
     pub triangles: usize,
     pub passes: Vec<(String, (f64, f64, f64))>,
     pub total: (f64, f64, f64),
+    pub frame: (f64, f64, f64),
+    pub untimed: (f64, f64, f64),
     /// BRDF samples the shading passes took: covered pixels × spp × lobe components (a split lobe's
     /// two views, a symmetrised material's reversed terms), or × spp alone for `mis`.
     pub pixel_samples: u64,
 }
 
-/// The frame-time goal of the goal row: ≤ 40 ms at 512², `key`, diffuse + 4 lobes, on 2-core lavapipe.
+/// The lavapipe frame-time goal for the goal row: ≤ 40 ms at 512², `key`, diffuse + 4 lobes.
 pub const GOAL_MS: f64 = 40.0;
 
 /// Floating-point operations in one vec4-path lobe sample of `lobe.comp`, by hand count: the
@@ -149,8 +170,15 @@ pub fn material(n: usize) -> Material {
 /// `(median, min, max)` in ms.
 pub type Spread = (f64, f64, f64);
 
-/// Per pass its spread, the total's, and the pixel-samples of a frame.
-type Times = (Vec<(String, Spread)>, Spread, u64);
+/// A configuration's spreads: per pass, of the passes' sum, of the whole frame and of its untimed
+/// part, and the pixel-samples of a frame.
+pub struct Times {
+    passes: Vec<(String, Spread)>,
+    total: Spread,
+    frame: Spread,
+    untimed: Spread,
+    pixel_samples: u64,
+}
 
 /// The BRDF samples one frame of `m` takes at `covered` pixels (see [`Measurement::pixel_samples`]).
 fn pixel_samples(m: &Material, s: &Settings, covered: u64) -> u64 {
@@ -170,27 +198,41 @@ fn pixel_samples(m: &Material, s: &Settings, covered: u64) -> u64 {
     covered * u64::from(s.spp) * components
 }
 
-/// Per pass and in total, the spread of the frames' GPU times.
-fn spreads(frames: Vec<Vec<PassTime>>, pixel_samples: u64) -> Times {
+/// Per pass, in total and for the whole frame, the spread of the frames' GPU times.
+fn spreads(frames: Vec<FrameTimes>, pixel_samples: u64) -> Times {
     let mut per: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut totals = Vec::new();
-    for timings in frames {
-        totals.push(timings.iter().map(|t| t.ms).sum());
-        for t in timings {
+    let (mut totals, mut wholes, mut untimed) = (Vec::new(), Vec::new(), Vec::new());
+    for f in frames {
+        totals.push(f.passes_ms());
+        wholes.push(f.frame_ms);
+        untimed.push(f.untimed_ms());
+        for t in f.passes {
             match per.iter_mut().find(|p| p.0 == t.name) {
                 Some(p) => p.1.push(t.ms),
                 None => per.push((t.name, vec![t.ms])),
             }
         }
     }
-    (per.into_iter().map(|(n, v)| (n, super::stats(&v))).collect(), super::stats(&totals), pixel_samples)
+    Times {
+        passes: per.into_iter().map(|(n, v)| (n, super::stats(&v))).collect(),
+        total: super::stats(&totals),
+        frame: super::stats(&wholes),
+        untimed: super::stats(&untimed),
+        pixel_samples,
+    }
 }
 
-fn measure(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize) -> Result<Times> {
-    // One frame first, not counted: drivers (lavapipe among them) compile pipelines on first use.
+/// `warmup` untimed frames (at least one: the first builds the pipelines, drivers such as lavapipe
+/// compile on first use, and a GPU's clocks follow its load), then `repeats` timed ones.
+fn measure(r: &mut Renderer, m: &Material, s: &Settings, warmup: usize, repeats: usize) -> Result<Times> {
     let first = r.render(m, s)?;
     let covered = first.image.pixels.iter().filter(|p| p[3] > 0.5).count() as u64;
-    let frames = (0..repeats.max(1)).map(|_| r.render(m, s).map(|f| f.timings)).collect::<Result<Vec<_>>>()?;
+    for _ in 1..warmup {
+        r.render(m, s)?;
+    }
+    let frames = (0..repeats.max(1))
+        .map(|_| r.render(m, s).map(|f| FrameTimes { frame_ms: f.frame_ms, passes: f.timings }))
+        .collect::<Result<Vec<_>>>()?;
     Ok(spreads(frames, pixel_samples(m, s, covered)))
 }
 
@@ -220,8 +262,9 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
     }
     r.finish_frames()?;
     r.ctx.check_validation()?;
-    let frames: Vec<Vec<PassTime>> = r.take_finished().into_iter().skip(2).map(|f| f.timings).collect();
-    if frames.iter().any(|timings| timings.iter().any(|t| t.name == "gbuffer")) {
+    let frames: Vec<FrameTimes> =
+        r.take_finished().into_iter().skip(2).map(|f| FrameTimes { passes: f.timings, frame_ms: f.frame_ms }).collect();
+    if frames.iter().any(|f| f.passes.iter().any(|t| t.name == "gbuffer")) {
         return Err(crate::Error::input("bench", "a frame with the camera unchanged rasterised its G-buffer again"));
     }
     Ok(spreads(frames, pixel_samples))
@@ -240,14 +283,24 @@ fn settings((w, h): (u32, u32), spp: u32) -> Settings {
     }
 }
 
-/// Runs every group of the plan.
+/// Runs every group of the plan, with the control row at the start, in the middle and at the end.
 pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurement>> {
     let env = super::environment(&plan.hdri, ENV)?;
     r.set_environment(&env)?;
     let sphere = Mesh::sphere();
     let four = material(4);
+    let goal_material = goal_material()?;
     let mut out = Vec::new();
-    let total = 1 + plan.lobe_counts.len() + plan.sizes.len() + plan.tessellations.len() + plan.spps.len() + 2 + 2 + 4;
+    let total = 3
+        + plan.goal_sizes.len()
+        + 1
+        + plan.lobe_counts.len()
+        + plan.sizes.len()
+        + plan.tessellations.len()
+        + plan.spps.len()
+        + Estimator::ALL.len()
+        + 2
+        + 2;
     let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
     // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
     let tick = || {
@@ -259,59 +312,66 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
         }
         Ok(())
     };
-    let mut push = |group, label: String, triangles, (passes, total, pixel_samples)| {
-        out.push(Measurement { group, label, triangles, passes, total, pixel_samples });
+    let mut push = |group, label: String, triangles, t: Times| {
+        out.push(Measurement {
+            group,
+            label,
+            triangles,
+            passes: t.passes,
+            total: t.total,
+            frame: t.frame,
+            untimed: t.untimed,
+            pixel_samples: t.pixel_samples,
+        });
     };
-    // The goal scene first: the default estimator on diffuse + 4 lobes.
+    let warm = plan.warmup;
+    let goal_at = |size: (u32, u32)| Settings { estimator: Estimator::Key, ..settings(size, 8) };
+    let control_label = format!("{}x{} key", plan.control_size.0, plan.control_size.1);
     r.set_mesh(&sphere)?;
-    let goal = Settings { estimator: Estimator::Key, ..settings(plan.size, 8) };
-    let full = measure(r, &goal_material()?, &goal, plan.goal_repeats)?;
-    let samples = full.2;
-    push("goal", format!("{}x{} key", plan.size.0, plan.size.1), sphere.triangle_count(), full);
-    // The same scene as the editor draws it while the camera stays (painting): the G-buffer kept.
-    push(
-        "goal-kept",
-        format!("{}x{} key, kept", plan.size.0, plan.size.1),
-        sphere.triangle_count(),
-        measure_kept(r, &goal_material()?, &goal, plan.goal_repeats, samples)?,
-    );
+    let control = |r: &mut Renderer| measure(r, &goal_material, &goal_at(plan.control_size), warm, plan.goal_repeats);
+    push("control", format!("{control_label}, start"), sphere.triangle_count(), control(r)?);
     tick()?;
+    // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
+    for (k, &size) in plan.goal_sizes.iter().enumerate() {
+        let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
+        let t = measure(r, &goal_material, &goal_at(size), warm, repeats)?;
+        let samples = t.pixel_samples;
+        push("goal", format!("{}x{} key", size.0, size.1), sphere.triangle_count(), t);
+        tick()?;
+        // The same scene as the editor draws it while the camera stays (painting): the G-buffer
+        // kept; at the first goal size.
+        if k == 0 {
+            let kept = measure_kept(r, &goal_material, &goal_at(size), plan.goal_repeats, samples)?;
+            push("goal-kept", format!("{}x{} key, kept", size.0, size.1), sphere.triangle_count(), kept);
+            tick()?;
+        }
+    }
     for &n in &plan.lobe_counts {
-        push(
-            "lobes",
-            format!("{n} lobes"),
-            sphere.triangle_count(),
-            measure(r, &material(n), &settings(plan.size, 8), plan.repeats)?,
-        );
+        let t = measure(r, &material(n), &settings(plan.size, 8), warm, plan.repeats)?;
+        push("lobes", format!("{n} lobes"), sphere.triangle_count(), t);
         tick()?;
     }
     for &size in &plan.sizes {
-        push(
-            "size",
-            format!("{}x{}", size.0, size.1),
-            sphere.triangle_count(),
-            measure(r, &four, &settings(size, 8), plan.repeats)?,
-        );
+        let t = measure(r, &four, &settings(size, 8), warm, plan.repeats)?;
+        push("size", format!("{}x{}", size.0, size.1), sphere.triangle_count(), t);
         tick()?;
     }
     for &spp in &plan.spps {
-        push(
-            "spp",
-            format!("{spp} spp"),
-            sphere.triangle_count(),
-            measure(r, &four, &settings(plan.size, spp), plan.repeats)?,
-        );
+        let t = measure(r, &four, &settings(plan.size, spp), warm, plan.repeats)?;
+        push("spp", format!("{spp} spp"), sphere.triangle_count(), t);
         tick()?;
     }
+    push("control", format!("{control_label}, middle"), sphere.triangle_count(), control(r)?);
+    tick()?;
     // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
     for e in Estimator::ALL {
         let s = Settings { estimator: e, ..settings(plan.size, 8) };
-        push("estimator", e.name().to_string(), sphere.triangle_count(), measure(r, &four, &s, plan.repeats)?);
+        push("estimator", e.name().to_string(), sphere.triangle_count(), measure(r, &four, &s, warm, plan.repeats)?);
         tick()?;
     }
     for vec4 in [true, false] {
         r.scalar_lobes = !vec4;
-        let m = measure(r, &four, &settings(plan.size, 8), plan.repeats);
+        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
         r.scalar_lobes = false;
         push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
         tick()?;
@@ -319,7 +379,7 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
     for cull in [true, false] {
         r.cull_hidden_faces = cull;
-        let m = measure(r, &four, &settings(plan.size, 8), plan.repeats);
+        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
         r.cull_hidden_faces = true;
         push("culling", (if cull { "hidden culled" } else { "all faces" }).to_string(), sphere.triangle_count(), m?);
         tick()?;
@@ -327,19 +387,23 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     for &(seg, rings) in &plan.tessellations {
         let mesh = Mesh::uv_sphere(seg, rings);
         r.set_mesh(&mesh)?;
-        push(
-            "triangles",
-            format!("{} triangles", mesh.triangle_count()),
-            mesh.triangle_count(),
-            measure(r, &four, &settings(plan.size, 8), plan.repeats)?,
-        );
+        let t = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats)?;
+        push("triangles", format!("{} triangles", mesh.triangle_count()), mesh.triangle_count(), t);
         tick()?;
     }
     r.set_mesh(&sphere)?;
+    push("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?);
+    tick()?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
     Ok(out)
+}
+
+/// The control rows' stability (`control::stability` of their whole-frame medians).
+pub fn stability(rows: &[Measurement]) -> super::control::Stability {
+    let medians: Vec<f64> = rows.iter().filter(|r| r.group == "control").map(|r| r.frame.0).collect();
+    super::control::stability(&medians)
 }
 
 /// The device's arithmetic peak in GFLOP/s (`render::peak`), median of `repeats` runs.
@@ -353,24 +417,36 @@ pub fn peak(r: &Renderer, repeats: usize) -> Result<f64> {
 }
 
 /// The printed table: per configuration the median ms of the G-buffer pass (in a frame that
-/// rasterises, with the background and diffuse term it starts the image with), all lobe
-/// passes and the rough lobes' filter, the total with its spread, the lobe passes' ns per pixel-sample and their share
-/// of the peak; the goal row against [`GOAL_MS`].
+/// rasterises, with the background and diffuse term it starts the image with), all lobe passes and
+/// the rough lobes' filter, the passes' sum with its spread, the whole frame and its untimed part,
+/// the lobe passes' ns per pixel-sample and their share of the peak; the goal rows against
+/// [`GOAL_MS`]; whether the control rows agree.
 pub fn table(rows: &[Measurement], device: &str, peak_gflops: f64) -> String {
     let mut s = format!(
-        "GPU ms per pass on {device} (median of repeated frames; total: median [min, max]); arithmetic peak \
-         {peak_gflops:.1} GFLOP/s (vec4 FMAs); share of peak at {FLOPS_PER_SAMPLE} flops a lobe sample\n\n"
+        "GPU ms per pass on {device} (median of repeated frames; passes: their sum, median [min, max]; frame: the \
+         whole frame, first command to last; untimed: frame less passes); arithmetic peak {peak_gflops:.1} GFLOP/s \
+         (vec4 FMAs); share of peak at {FLOPS_PER_SAMPLE} flops a lobe sample\n\n"
     );
     s.push_str(&format!(
-        "{:<10} {:<18} {:>9} {:>9} {:>9} {:>9} {:>26} {:>10} {:>7}\n",
-        "group", "configuration", "gbuffer", "lobes", "per lobe", "filter", "total", "ns/sample", "% peak"
+        "{:<10} {:<22} {:>9} {:>9} {:>9} {:>9} {:>26} {:>9} {:>9} {:>10} {:>7}\n",
+        "group",
+        "configuration",
+        "gbuffer",
+        "lobes",
+        "per lobe",
+        "filter",
+        "passes",
+        "frame",
+        "untimed",
+        "ns/sample",
+        "% peak"
     ));
     for r in rows {
         let lobes: Vec<f64> = r.passes.iter().filter(|p| p.0.starts_with("lobe")).map(|p| p.1 .0).collect();
         let per = if lobes.is_empty() { 0.0 } else { lobes.iter().sum::<f64>() / lobes.len() as f64 };
         let share = r.share_of_peak(peak_gflops).map_or("—".to_string(), |x| format!("{:.1}", 100.0 * x));
         s.push_str(&format!(
-            "{:<10} {:<18} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} [{:.3}, {:.3}] {:>10.2} {:>7}\n",
+            "{:<10} {:<22} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} [{:.3}, {:.3}] {:>9.3} {:>9.3} {:>10.2} {:>7}\n",
             r.group,
             r.label,
             r.ms("gbuffer"),
@@ -380,48 +456,81 @@ pub fn table(rows: &[Measurement], device: &str, peak_gflops: f64) -> String {
             r.total.0,
             r.total.1,
             r.total.2,
+            r.frame.0,
+            r.untimed.0,
             r.ns_per_sample(),
             share
         ));
     }
-    if let Some(g) = rows.iter().find(|r| r.group == "goal") {
+    for g in rows.iter().filter(|r| r.group == "goal") {
         s.push_str(&format!(
-            "\ngoal (4 lobes, sphere, 512², key 8 spp: <= {GOAL_MS} ms a frame): {:.1} ms median [{:.1}, {:.1}] \
-             ({}) -- {}\n",
-            g.total.0,
-            g.total.1,
-            g.total.2,
-            g.label,
-            match (g.label.starts_with("512x512"), g.total.0 <= GOAL_MS) {
-                (false, _) => "the goal is for 512², this run is not",
-                (true, true) => "met",
-                (true, false) => "not met",
-            }
+            "\ngoal scene {} (key, diffuse + 4 lobes, 8 spp): whole frame {:.3} ms median [{:.3}, {:.3}], passes {:.3} ms",
+            g.label, g.frame.0, g.frame.1, g.frame.2, g.total.0
         ));
+        if g.label.starts_with("512x512") {
+            let met = if g.frame.0 <= GOAL_MS { "met" } else { "not met" };
+            s.push_str(&format!(" (lavapipe goal <= {GOAL_MS} ms: {met})"));
+        }
     }
+    s.push('\n');
     if let Some(k) = rows.iter().find(|r| r.group == "goal-kept") {
         s.push_str(&format!(
-            "the same scene with its G-buffer kept (the editor's frame while the camera stays): {:.1} ms median \
-             [{:.1}, {:.1}]\n",
-            k.total.0, k.total.1, k.total.2
+            "the same scene with its G-buffer kept (the editor's frame while the camera stays): {:.3} ms median \
+             [{:.3}, {:.3}]\n",
+            k.frame.0, k.frame.1, k.frame.2
         ));
     }
+    let st = stability(rows);
+    let medians: Vec<String> =
+        rows.iter().filter(|r| r.group == "control").map(|r| format!("{:.3}", r.frame.0)).collect();
+    s.push_str(&format!(
+        "control rows (whole frame, ms): {} -- {:.1} % apart: {}\n",
+        medians.join(", "),
+        100.0 * st.spread,
+        if st.stable { "stable" } else { "UNSTABLE (more than 5 % apart; the rows are not comparable)" }
+    ));
     s
 }
 
+/// A spread as JSON.
+fn spread_json(s: Spread) -> serde_json::Value {
+    serde_json::json!({"median": s.0, "min": s.1, "max": s.2})
+}
+
+/// The device's driver as JSON: `VkPhysicalDeviceDriverProperties`' name and information, and
+/// `driverVersion` raw and as the vendor writes it.
+pub fn driver_json(info: &crate::vk::device::DeviceInfo) -> serde_json::Value {
+    serde_json::json!({
+        "name": info.driver_name,
+        "info": info.driver_info,
+        "version": info.driver_version_text(),
+        "version_raw": info.driver_version,
+        "vendor_id": info.vendor_id,
+        "device_id": info.device_id,
+    })
+}
+
 pub fn json(rows: &[Measurement], device: &str, plan: &Plan, peak_gflops: f64) -> serde_json::Value {
+    let st = stability(rows);
     serde_json::json!({
         "device": device,
         "repeats": plan.repeats,
         "goal_repeats": plan.goal_repeats,
+        "warmup": plan.warmup,
         "peak_gflops": peak_gflops,
         "flops_per_sample": FLOPS_PER_SAMPLE,
         "goal_ms": GOAL_MS,
+        "stable": st.stable,
+        "control_spread": if st.spread.is_finite() { serde_json::json!(st.spread) } else { serde_json::Value::Null },
+        "control_tolerance": super::control::CONTROL_TOLERANCE,
+        "control_frame_ms": rows.iter().filter(|r| r.group == "control").map(|r| r.frame.0).collect::<Vec<_>>(),
         "configurations": rows.iter().map(|r| serde_json::json!({
             "group": r.group,
             "label": r.label,
             "triangles": r.triangles,
-            "total_ms": {"median": r.total.0, "min": r.total.1, "max": r.total.2},
+            "total_ms": spread_json(r.total),
+            "frame_ms": spread_json(r.frame),
+            "untimed_ms": spread_json(r.untimed),
             "pixel_samples": r.pixel_samples,
             "ns_per_sample": r.ns_per_sample(),
             "share_of_peak": r.share_of_peak(peak_gflops),

@@ -19,7 +19,7 @@ pub struct ViewerRow {
     pub size: (u32, u32),
     pub material: String,
     pub lobes: usize,
-    /// Median wall and GPU ms per frame.
+    /// Median wall ms and whole-frame GPU ms per frame.
     pub wall_ms: f64,
     pub gpu_ms: f64,
     pub frames: usize,
@@ -75,7 +75,7 @@ pub fn run(
     Ok(out)
 }
 
-/// Wall ms and GPU ms of each counted frame.
+/// Wall ms and whole-frame GPU ms of each counted frame.
 fn frames_of(
     r: &mut Renderer,
     m: &Material,
@@ -134,7 +134,7 @@ fn frames_of(
     }
     r.finish_frames()?;
     for f in r.take_finished() {
-        gpu.insert(f.number, f.timings.iter().map(|t| t.ms).sum::<f64>());
+        gpu.insert(f.number, f.frame_ms);
     }
     r.ctx.check_validation()?;
     let first = r.frame_number() + 1 - frames as u64;

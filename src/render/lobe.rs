@@ -301,8 +301,8 @@ fn pipeline_name(v: &Variant) -> String {
     format!("lobe[{}]", v.tag())
 }
 
-fn build(raw: &ash::Device, v: &Variant) -> Result<Pipeline> {
-    Pipeline::compute_on(raw, crate::spirv!("lobe.comp"), &pipeline_name(v), &BINDINGS, 128, &v.constants())
+fn build(raw: &ash::Device, cache: ash::vk::PipelineCache, v: &Variant) -> Result<Pipeline> {
+    Pipeline::compute_on(raw, cache, crate::spirv!("lobe.comp"), &pipeline_name(v), &BINDINGS, 128, &v.constants())
 }
 
 fn panicked() -> crate::Error {
@@ -353,7 +353,7 @@ impl LobePass {
         self.collect(ctx)?;
         for v in variants {
             if !self.pipelines.contains_key(v) {
-                let p = build(ctx.raw(), v)?;
+                let p = build(ctx.raw(), ctx.pipeline_cache.raw, v)?;
                 self.insert(ctx, *v, p);
             }
         }
@@ -384,12 +384,13 @@ impl LobePass {
             return Ok(());
         }
         let (raw, variant, notify, sender) = (ctx.raw().clone(), v, notify.clone(), self.built.0.clone());
+        let cache = ctx.pipeline_cache.raw;
         // The device outlives the thread: `destroy` joins it before the renderer lets the device go.
         let thread = std::thread::Builder::new()
             .name("lobe pipeline".into())
             .spawn(move || {
                 let done = Done { variant, sender, notify };
-                let _ = done.sender.send((variant, build(&raw, &variant)));
+                let _ = done.sender.send((variant, build(&raw, cache, &variant)));
             })
             .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
         self.building.insert(v, thread);

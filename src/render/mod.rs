@@ -26,9 +26,11 @@ pub mod lobe;
 pub mod mesh;
 pub mod mis;
 pub mod peak;
+pub mod plan;
 mod record;
 mod settings;
 pub mod targets;
+pub mod zero;
 
 use ash::vk;
 use glam::DVec3;
@@ -61,6 +63,7 @@ struct Passes {
     eval: eval::EvalPass,
     accumulate: accumulate::AccumulatePass,
     compose: compose::ComposePass,
+    zero: zero::ZeroPass,
 }
 
 impl Passes {
@@ -77,6 +80,7 @@ impl Passes {
             eval: eval::EvalPass::new(ctx)?,
             accumulate: accumulate::AccumulatePass::new(ctx)?,
             compose: compose::ComposePass::new(ctx)?,
+            zero: zero::ZeroPass::new(ctx)?,
         })
     }
 
@@ -92,6 +96,7 @@ impl Passes {
         self.eval.destroy(ctx);
         self.accumulate.destroy(ctx);
         self.compose.destroy(ctx);
+        self.zero.destroy(ctx);
     }
 }
 
@@ -138,6 +143,9 @@ pub struct Renderer {
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
+    /// How frames start and zero their images on this device (`plan::FramePlan::from_env`); a test
+    /// forces the GPU plan on lavapipe and compares the images.
+    pub frame_plan: plan::FramePlan,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -191,6 +199,7 @@ impl Renderer {
             any_output_lobes: false,
             stratified_shifts: true,
             seed: 0,
+            frame_plan: plan::FramePlan::from_env(ctx.device.kind),
             build_in_background: None,
             passes: Some(passes),
             env: None,
@@ -321,7 +330,10 @@ impl Renderer {
                 self.readback = Some(readback::buffer_for(&self.ctx, &targets.accum)?);
             }
             let targets = self.views[settings.view as usize].as_ref().expect("made by record");
-            let cmd = self.ring.as_ref().expect("ring lives until drop").current_ref().cmd;
+            let frame = self.ring.as_mut().expect("ring lives until drop").current();
+            let cmd = frame.cmd;
+            // The frame's time ends with its passes: the readback copy is the tool's, not the frame's.
+            frame.timestamps.end_frame(&self.ctx, cmd);
             let buffer = self.readback.as_ref().expect("made above");
             readback::record(&self.ctx, cmd, &targets.accum, vk::ImageLayout::GENERAL, buffer);
             Ok(())
@@ -331,10 +343,11 @@ impl Renderer {
             return Err(e);
         }
         self.submit_frame(None, None)?;
-        let timings = self.ring.as_mut().expect("ring lives until drop").wait(&self.ctx)?;
+        let times = self.ring.as_mut().expect("ring lives until drop").wait(&self.ctx)?;
         let pixels = readback::pixels(self.readback.as_ref().expect("made above"));
         self.ctx.check_validation()?;
-        Ok(Frame { image: Image { width: settings.width, height: settings.height, pixels }, timings })
+        let image = Image { width: settings.width, height: settings.height, pixels };
+        Ok(Frame { image, timings: times.passes, frame_ms: times.frame_ms })
     }
 
     /// Reads the mesh view back as it is shown: the refinement's mean when refining, else its last

@@ -442,6 +442,7 @@ impl Renderer {
         // A frame that rasterises and filters sparsely leaves the diffuse term to the filter, which
         // reads and writes every listed pixel anyway (`compact::Start::Later`).
         let later = raster
+            && self.frame_plan.clear_then_later
             && sparse
             && settings.estimator != Estimator::Mis
             && intos.iter().any(|into| matches!(into, lobe::Into::Cells { .. }));
@@ -464,11 +465,14 @@ impl Renderer {
             })?;
         }
         // A frame that keeps a G-buffer whose pixels are not listed lists them, in the pass that
-        // starts the image as the background and diffuse passes would (bit for bit; a test compares).
-        let relist = !raster && !targets.pixels_listed;
+        // starts the image as the background and diffuse passes would (bit for bit). So does every
+        // frame that keeps its G-buffer where the frame plan draws that image again rather than
+        // copying it.
+        let copy_base = self.frame_plan.copy_base;
+        let relist = !raster && (!targets.pixels_listed || (!copy_base && settings.estimator != Estimator::Mis));
         // A frame that keeps the G-buffer starts from the image the background and diffuse passes
         // left the frame before (`Targets::base`): while painting only the lobes change.
-        let base_key = (settings.estimator != Estimator::Mis && !raster).then(|| {
+        let base_key = (settings.estimator != Estimator::Mis && !raster && copy_base).then(|| {
             let env = self.env.as_ref().map(|e| e.key.clone()).unwrap_or_default();
             (env, key, material.diffuse.map(f64::to_bits))
         });
@@ -512,11 +516,13 @@ impl Renderer {
                     .fold(f64::INFINITY, f64::min);
                 if min_alpha.is_finite() {
                     // Zero (unmarked) where no lobe pass writes (`denoise.comp`); the passes add.
-                    if sparse {
-                        targets.cells.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
-                        targets.cells_light.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                    let images = if sparse { vec![&targets.cells, &targets.cells_light] } else { vec![&targets.rough] };
+                    if self.frame_plan.zero_by_compute {
+                        ts.time(ctx, cmd, "zero", || passes.zero.record(ctx, cmd, pool, &images))?;
                     } else {
-                        targets.rough.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                        for image in images {
+                            image.clear_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
+                        }
                     }
                 }
                 for (&(i, v), &into) in lobes.iter().zip(&intos) {

@@ -109,10 +109,25 @@ pub struct Settings {
     pub intensity: f64,
 }
 
-/// A rendered frame: the linear image (alpha = coverage) and the GPU time of every pass that ran.
+/// A rendered frame: the linear image (alpha = coverage), the GPU time of every pass that ran and
+/// of the whole frame (first command to last: the passes, the clears and copies between them, and
+/// the image's copy into the readback buffer).
 pub struct Frame {
     pub image: Image,
     pub timings: Vec<PassTime>,
+    pub frame_ms: f64,
+}
+
+impl Frame {
+    /// The sum of the timed passes.
+    pub fn passes_ms(&self) -> f64 {
+        self.timings.iter().map(|t| t.ms).sum::<f64>() + 0.0
+    }
+
+    /// The whole frame less its timed passes (`vk::query::untimed_ms`).
+    pub fn untimed_ms(&self) -> f64 {
+        crate::vk::query::untimed_ms(self.frame_ms, self.passes_ms())
+    }
 }
 
 /// What [`super::Renderer::record`] put in the frame.

@@ -19,7 +19,66 @@ pub struct Device {
     pub timestamp_period: f32,
     pub timestamp_valid_bits: u32,
     pub limits: vk::PhysicalDeviceLimits,
+    /// What `bench` names the device by and what the frame plan (`render::plan`) and the pipeline
+    /// cache's header read.
+    pub info: DeviceInfo,
     debug_utils: ash::ext::debug_utils::Device,
+}
+
+/// The device's vendor, driver, subgroup size and pipeline-cache identity.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DeviceInfo {
+    /// PCI vendor id (`0x10de` NVIDIA, `0x1002` AMD, `0x8086` Intel, `0x10005` Mesa's software devices).
+    pub vendor_id: u32,
+    pub device_id: u32,
+    /// `VkPhysicalDeviceDriverProperties`: the driver's name and its free-form information.
+    pub driver_name: String,
+    pub driver_info: String,
+    /// `VkPhysicalDeviceProperties::driverVersion`, as the vendor encodes it.
+    pub driver_version: u32,
+    pub api_version: u32,
+    /// `VkPhysicalDeviceProperties::pipelineCacheUUID`: a cache written by another device or driver
+    /// is refused by this.
+    pub pipeline_cache_uuid: [u8; 16],
+    pub subgroup_size: u32,
+}
+
+impl DeviceInfo {
+    /// The driver's version as its vendor writes it: NVIDIA `major.minor.patch` of 10.8.8 bits,
+    /// the others Vulkan's `major.minor.patch`.
+    pub fn driver_version_text(&self) -> String {
+        let v = self.driver_version;
+        if self.vendor_id == 0x10de {
+            format!("{}.{}.{}", v >> 22, (v >> 14) & 0xff, (v >> 6) & 0xff)
+        } else {
+            format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+        }
+    }
+}
+
+fn c_text(chars: &[std::ffi::c_char]) -> String {
+    CStr::from_bytes_until_nul(bytemuck_name(chars)).map(|c| c.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+/// The device's [`DeviceInfo`] (a Vulkan 1.3 device: driver properties are core).
+fn device_info(instance: &Instance, physical: vk::PhysicalDevice) -> DeviceInfo {
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut subgroup);
+    // SAFETY: `physical` came from this instance, a Vulkan 1.3 instance; `props` and its chain
+    // outlive the call.
+    unsafe { instance.raw.get_physical_device_properties2(physical, &mut props) };
+    let p = props.properties;
+    DeviceInfo {
+        vendor_id: p.vendor_id,
+        device_id: p.device_id,
+        driver_name: c_text(&driver.driver_name),
+        driver_info: c_text(&driver.driver_info),
+        driver_version: p.driver_version,
+        api_version: p.api_version,
+        pipeline_cache_uuid: p.pipeline_cache_uuid,
+        subgroup_size: subgroup.subgroup_size,
+    }
 }
 
 /// A Vulkan 1.3 device the program can use.
@@ -135,7 +194,9 @@ impl Device {
         // SAFETY: as above.
         let families = unsafe { instance.raw.get_physical_device_queue_family_properties(chosen.physical) };
         let debug_utils = ash::ext::debug_utils::Device::new(&instance.raw, &raw);
+        let info = device_info(instance, chosen.physical);
         Ok(Device {
+            info,
             physical: chosen.physical,
             debug_utils,
             limits: props.limits,

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::query::{PassTime, Timestamps};
+use super::query::{FrameTimes, PassTime, Timestamps};
 use super::{descriptor, vk_err, Buffer, Context};
 use crate::error::Result;
 
@@ -142,6 +142,8 @@ impl Frame {
 pub struct Finished {
     pub number: u64,
     pub timings: Vec<PassTime>,
+    /// The whole frame, first command to last (`Timestamps::end_frame`).
+    pub frame_ms: f64,
 }
 
 pub struct FrameRing {
@@ -232,8 +234,8 @@ impl FrameRing {
         f.pending = false;
         if !f.read {
             f.read = true;
-            let timings = f.timestamps.read(ctx)?;
-            self.finished.push(Finished { number: f.number, timings });
+            let t = f.timestamps.read(ctx)?;
+            self.finished.push(Finished { number: f.number, timings: t.passes, frame_ms: t.frame_ms });
         }
         Ok(())
     }
@@ -270,6 +272,7 @@ impl FrameRing {
         self.recording = false;
         let f = &mut self.frames[self.current];
         let raw = ctx.raw();
+        f.timestamps.end_frame(ctx, f.cmd);
         // SAFETY: the buffer is recording (begun in `begin`).
         unsafe { raw.end_command_buffer(f.cmd) }.map_err(vk_err("vkEndCommandBuffer"))?;
         let cmds = [f.cmd];
@@ -314,12 +317,15 @@ impl FrameRing {
     }
 
     /// Waits for the frame just submitted and returns its GPU times (the headless path).
-    pub fn wait(&mut self, ctx: &Context) -> Result<Vec<PassTime>> {
+    pub fn wait(&mut self, ctx: &Context) -> Result<FrameTimes> {
         self.settle(ctx, self.current)?;
         let number = self.frames[self.current].number;
         Ok(match self.finished.iter().position(|f| f.number == number) {
-            Some(k) => self.finished.remove(k).timings,
-            None => Vec::new(),
+            Some(k) => {
+                let f = self.finished.remove(k);
+                FrameTimes { passes: f.timings, frame_ms: f.frame_ms }
+            }
+            None => FrameTimes::default(),
         })
     }
 

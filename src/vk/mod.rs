@@ -2,7 +2,8 @@
 //! program creates; `brdf`, `brush` and `scene` never see any of it.
 //!
 //! [`Context`] is the root: instance (with the validation messenger), logical device, memory
-//! allocator and the command pool. Drop order: wait idle → allocator → commands → device → instance.
+//! allocator, the command pool and the pipeline cache. Drop order: wait idle → pipeline cache
+//! (saved) → allocator → commands → device → instance.
 
 pub mod barrier;
 pub mod buffer;
@@ -13,6 +14,7 @@ pub mod frame;
 pub mod image;
 pub mod instance;
 pub mod pipeline;
+pub mod pipeline_cache;
 pub mod query;
 pub mod readback;
 pub mod shader;
@@ -56,10 +58,12 @@ pub fn alloc_err(call: &'static str) -> impl Fn(gpu_allocator::AllocationError) 
     }
 }
 
-/// Instance, device, allocator and command pool.
+/// Instance, device, allocator, command pool and pipeline cache.
 pub struct Context {
     pub allocator: ManuallyDrop<Mutex<Allocator>>,
     pub commands: ManuallyDrop<Commands>,
+    /// Every pipeline is built through it (`Pipeline::compute`, `Pipeline::graphics`).
+    pub pipeline_cache: ManuallyDrop<pipeline_cache::PipelineCache>,
     pub device: Device,
     pub instance: Instance,
 }
@@ -90,9 +94,11 @@ impl Context {
         })
         .map_err(alloc_err("gpu_allocator::Allocator::new"))?;
         let commands = Commands::new(&device)?;
+        let pipeline_cache = pipeline_cache::PipelineCache::open_default(&device);
         Ok(Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             commands: ManuallyDrop::new(commands),
+            pipeline_cache: ManuallyDrop::new(pipeline_cache),
             device,
             instance,
         })
@@ -138,8 +144,10 @@ impl Drop for Context {
     fn drop(&mut self) {
         // SAFETY: nothing else records or submits once the context drops.
         let _ = unsafe { self.device.raw.device_wait_idle() };
-        // SAFETY: each is dropped exactly once, here, before the device they were made from.
+        // SAFETY: each is dropped exactly once, here, before the device they were made from; the
+        // owners of pipeline-building threads join them before the context drops.
         unsafe {
+            ManuallyDrop::take(&mut self.pipeline_cache).destroy(&self.device);
             ManuallyDrop::drop(&mut self.allocator);
             let commands = ManuallyDrop::take(&mut self.commands);
             commands.destroy(&self.device);

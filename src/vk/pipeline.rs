@@ -66,7 +66,7 @@ impl Pipeline {
         push_size: u32,
         spec: &[u32],
     ) -> Result<Pipeline> {
-        let p = Pipeline::compute_on(ctx.raw(), spv, name, bindings, push_size, spec)?;
+        let p = Pipeline::compute_on(ctx.raw(), ctx.pipeline_cache.raw, spv, name, bindings, push_size, spec)?;
         p.name(ctx, name);
         Ok(p)
     }
@@ -98,10 +98,12 @@ impl Pipeline {
         }
     }
 
-    /// [`Pipeline::compute`] through a device handle alone, unnamed: what a thread that compiles
-    /// pipelines in the background calls (the caller names it with [`Pipeline::name`]).
+    /// [`Pipeline::compute`] through a device handle and the pipeline cache alone, unnamed: what a
+    /// thread that compiles pipelines in the background calls (the caller names it with
+    /// [`Pipeline::name`]). The cache may be null.
     pub fn compute_on(
         raw: &ash::Device,
+        cache: vk::PipelineCache,
         spv: &[u8],
         name: &str,
         bindings: &[vk::DescriptorType],
@@ -130,7 +132,8 @@ impl Pipeline {
             .specialization_info(&spec_info);
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         // SAFETY: module and layout are live; the infos outlive the call.
-        let created = unsafe { raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        // The cache is internally synchronised: threads building at once may share it.
+        let created = unsafe { raw.create_compute_pipelines(cache, &info, None) };
         // SAFETY: a module may be destroyed once the pipeline is created.
         unsafe { raw.destroy_shader_module(module, None) };
         let p = Pipeline {
@@ -246,7 +249,7 @@ impl Pipeline {
             .layout(layout)
             .push_next(&mut rendering)];
         // SAFETY: modules and layout are live; the infos outlive the call.
-        let created = unsafe { ctx.raw().create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+        let created = unsafe { ctx.raw().create_graphics_pipelines(ctx.pipeline_cache.raw, &info, None) };
         destroy_modules();
         let p = Pipeline {
             raw: vk::Pipeline::null(),

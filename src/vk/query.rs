@@ -1,5 +1,7 @@
-//! Timestamp queries: two per pass, reset inside the command buffer, read after the fence with
-//! `TYPE_64 | WAIT`, masked to `timestampValidBits` and scaled by `timestampPeriod`.
+//! Timestamp queries: a pair around the whole frame (the first written right after the reset, the
+//! last just before the command buffer ends, so every clear and copy between passes is inside it) and
+//! two per pass, reset inside the command buffer, read after the fence with `TYPE_64 | WAIT`, masked
+//! to `timestampValidBits` and scaled by `timestampPeriod`.
 //!
 //! On a CPU device (lavapipe) each timestamp is followed by a copy of its result with `WAIT` into a
 //! small device buffer (`settle`), which nothing reads. llvmpipe does not read the clock when it
@@ -24,6 +26,8 @@ pub struct Timestamps {
     /// Where a CPU device's timestamps are copied with `WAIT` (see the module's comment).
     settle: Option<Buffer>,
     names: Vec<String>,
+    /// Whether the whole frame's closing timestamp was written (`end_frame`).
+    ended: bool,
 }
 
 /// One pass's GPU time.
@@ -33,10 +37,40 @@ pub struct PassTime {
     pub ms: f64,
 }
 
+/// A finished frame's GPU times: each timed pass's and the whole frame's (first command to last).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameTimes {
+    pub passes: Vec<PassTime>,
+    /// The whole frame; 0 for a frame that recorded nothing.
+    pub frame_ms: f64,
+}
+
+impl FrameTimes {
+    /// The sum of the timed passes.
+    pub fn passes_ms(&self) -> f64 {
+        self.passes.iter().map(|t| t.ms).sum::<f64>() + 0.0
+    }
+
+    /// The part of the whole frame no pass timed (clears, copies, barriers between passes): the
+    /// whole frame less the passes, at least 0.
+    pub fn untimed_ms(&self) -> f64 {
+        untimed_ms(self.frame_ms, self.passes_ms())
+    }
+}
+
+/// `frame_ms − passes_ms`, at least 0 (the two timestamps of a pass and of the frame are read from
+/// the same clock, but a driver may round each).
+pub fn untimed_ms(frame_ms: f64, passes_ms: f64) -> f64 {
+    (frame_ms - passes_ms).max(0.0)
+}
+
+/// The queries of the whole frame's pair; the passes' pairs follow.
+const FRAME_QUERIES: u32 = 2;
+
 impl Timestamps {
-    /// Room for `passes` passes.
+    /// Room for `passes` passes and the whole frame.
     pub fn new(ctx: &Context, passes: u32) -> Result<Timestamps> {
-        let capacity = 2 * passes.max(1);
+        let capacity = FRAME_QUERIES + 2 * passes.max(1);
         let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
         // SAFETY: the device is live; the pool is destroyed in `destroy`.
         let pool = unsafe { ctx.raw().create_query_pool(&info, None) }.map_err(vk_err("vkCreateQueryPool"))?;
@@ -54,14 +88,27 @@ impl Timestamps {
         } else {
             None
         };
-        Ok(Timestamps { pool, capacity, settle, names: Vec::new() })
+        Ok(Timestamps { pool, capacity, settle, names: Vec::new(), ended: false })
     }
 
-    /// Resets every query; recorded first in the command buffer.
+    /// Resets every query and writes the whole frame's first timestamp; recorded first in the
+    /// command buffer.
     pub fn reset(&mut self, ctx: &Context, cmd: vk::CommandBuffer) {
         self.names.clear();
+        self.ended = false;
         // SAFETY: `cmd` is recording outside a render pass; the pool is live.
         unsafe { ctx.raw().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+        self.write(ctx, cmd, 0);
+    }
+
+    /// Writes the whole frame's last timestamp, outside a render pass: recorded last in the command
+    /// buffer (`FrameRing::submit`), or earlier by a frame that leaves what follows out of its time
+    /// (the headless render's readback copy); once a frame.
+    pub fn end_frame(&mut self, ctx: &Context, cmd: vk::CommandBuffer) {
+        if !self.ended {
+            self.write(ctx, cmd, 1);
+            self.ended = true;
+        }
     }
 
     fn write(&self, ctx: &Context, cmd: vk::CommandBuffer, index: u32) {
@@ -85,7 +132,7 @@ impl Timestamps {
         name: &str,
         pass: impl FnOnce() -> Result<T>,
     ) -> Result<T> {
-        let index = 2 * self.names.len() as u32;
+        let index = FRAME_QUERIES + 2 * self.names.len() as u32;
         let timed = index + 1 < self.capacity;
         if timed {
             self.write(ctx, cmd, index);
@@ -98,12 +145,12 @@ impl Timestamps {
         Ok(out)
     }
 
-    /// The times of the passes recorded, after the submission completed.
-    pub fn read(&self, ctx: &Context) -> Result<Vec<PassTime>> {
-        if self.names.is_empty() {
-            return Ok(Vec::new());
+    /// The times of the frame and of the passes recorded, after the submission completed.
+    pub fn read(&self, ctx: &Context) -> Result<FrameTimes> {
+        if !self.ended {
+            return Ok(FrameTimes::default());
         }
-        let mut ticks = vec![0u64; 2 * self.names.len()];
+        let mut ticks = vec![0u64; (FRAME_QUERIES as usize) + 2 * self.names.len()];
         // SAFETY: the queries were written by a submission the caller waited on.
         unsafe {
             ctx.raw().get_query_pool_results(
@@ -117,16 +164,14 @@ impl Timestamps {
         let bits = ctx.device.timestamp_valid_bits;
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         let period = ctx.device.timestamp_period as f64;
-        Ok(self
-            .names
-            .iter()
-            .enumerate()
-            .map(|(i, name)| {
-                let (a, b) = (ticks[2 * i] & mask, ticks[2 * i + 1] & mask);
-                let delta = b.wrapping_sub(a) & mask;
-                PassTime { name: name.clone(), ms: delta as f64 * period * 1e-6 }
-            })
-            .collect())
+        let ms = |i: usize| {
+            let (a, b) = (ticks[i] & mask, ticks[i + 1] & mask);
+            (b.wrapping_sub(a) & mask) as f64 * period * 1e-6
+        };
+        let f = FRAME_QUERIES as usize;
+        let passes =
+            self.names.iter().enumerate().map(|(i, name)| PassTime { name: name.clone(), ms: ms(f + 2 * i) }).collect();
+        Ok(FrameTimes { passes, frame_ms: ms(0) })
     }
 
     pub fn destroy(self, ctx: &Context) {
