@@ -35,7 +35,6 @@ fn same_material(a: &Material, b: &Material) -> bool {
         })
 }
 
-
 #[test]
 fn replay_through_the_window_equals_paint() {
     let dir = tempfile::TempDir::new().unwrap();

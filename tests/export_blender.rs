@@ -30,19 +30,6 @@ fn python() -> PathBuf {
     common::venv_python("blender-venv", "Blender's bpy 5.0.1")
 }
 
-fn export(material: &Path, out: &Path) {
-    let (code, _, err) = common::run(&[
-        "export",
-        "--material",
-        material.to_str().unwrap(),
-        "--format",
-        "blender",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "export blender: {err}");
-}
-
 /// Test image size.
 const SIZE: &str = "64x64";
 
@@ -224,7 +211,7 @@ fn blender_renders_what_reference_renders() {
             Some((_, s)) => s.clone(),
             None => {
                 let s = d.join(format!("case{k}.py"));
-                export(&c.material, &s);
+                common::export("blender", &c.material, &s);
                 scripts.push((c.material.clone(), s.clone()));
                 s
             }
@@ -391,7 +378,7 @@ fn blender_places_mesh_files_like_brdf_shop() {
     let dir = tempfile::tempdir().unwrap();
     let material = common::export_materials(dir.path()).into_iter().find(|(n, _)| n == "diffuse-only").unwrap().1;
     let script = dir.path().join("p.py");
-    export(&material, &script);
+    common::export("blender", &material, &script);
     let bunny = common::asset("meshes/bunny.obj");
     let ours = dir.path().join("bunny-cycles.exr");
     let out = Command::new(python())

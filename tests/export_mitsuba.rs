@@ -25,19 +25,6 @@ fn python() -> PathBuf {
     common::venv_python("mitsuba-venv", "Mitsuba 3")
 }
 
-fn export_plugin(material: &Path, out: &Path) {
-    let (code, _, err) = common::run(&[
-        "export",
-        "--material",
-        material.to_str().unwrap(),
-        "--format",
-        "mitsuba",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "export mitsuba: {err}");
-}
-
 /// Random pairs over the sphere (a quarter of each below the horizon), as `f32` values.
 fn pairs(n: usize) -> Vec<(DVec3, DVec3)> {
     let mut rng = Pcg32::new(5, 11);
@@ -72,7 +59,7 @@ fn plugin_eval_equals_eval_and_sample_weights_are_eval_over_pdf() {
     for (name, path) in common::export_materials(dir.path()) {
         let m = Material::load(&path).unwrap();
         let plugin = dir.path().join(format!("{name}.py"));
-        export_plugin(&path, &plugin);
+        common::export("mitsuba", &path, &plugin);
         let out = Command::new(python()).arg(&harness).arg(&plugin).arg(&pairs_file).output().unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
@@ -118,7 +105,7 @@ fn plugin_eval_equals_eval_and_sample_weights_are_eval_over_pdf() {
 /// L1 over the object and Mitsuba's wall time in seconds.
 fn compare(dir: &Path, name: &str, material: &Path, map: &str, size: u32, spp: u32, ref_spp: u32) -> (f64, f64) {
     let plugin = dir.join(format!("{name}.py"));
-    export_plugin(material, &plugin);
+    common::export("mitsuba", material, &plugin);
     let env = common::asset(&format!("hdri/{map}"));
     let size_arg = format!("{size}x{size}");
     let ours = dir.join(format!("{name}-{map}-mitsuba.exr"));
@@ -188,7 +175,7 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
     let dir = tempfile::tempdir().unwrap();
     let (_, material) = common::export_materials(dir.path()).pop().unwrap();
     let plugin = dir.path().join("p.py");
-    export_plugin(&material, &plugin);
+    common::export("mitsuba", &material, &plugin);
     let bunny = common::asset("meshes/bunny.obj");
     let ours = dir.path().join("bunny-mitsuba.exr");
     // An existing output of other permissions: replaced by a complete image that keeps them.
@@ -238,7 +225,7 @@ fn mitsuba_script_refuses_bad_arguments_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let (_, material) = common::export_materials(dir.path()).pop().unwrap();
     let plugin = dir.path().join("p.py");
-    export_plugin(&material, &plugin);
+    common::export("mitsuba", &material, &plugin);
     let out_exr = dir.path().join("o.exr");
     let o = out_exr.to_str().unwrap();
     let missing = dir.path().join("missing.exr");
@@ -278,7 +265,7 @@ fn plugin_normalises_subnormal_directions() {
     let (name, path) = common::export_materials(dir.path()).swap_remove(0);
     let m = Material::load(&path).unwrap();
     let plugin = dir.path().join("p.py");
-    export_plugin(&path, &plugin);
+    common::export("mitsuba", &path, &plugin);
     let cases = [
         (DVec3::new(1e-320, 2e-320, 3e-320), DVec3::new(0.0, 1e-320, 1e-320)),
         (DVec3::new(0.0, 0.0, 5e-324), DVec3::new(3e-320, 0.0, 4e-320)),

@@ -252,3 +252,10 @@ pub fn venv_python(venv: &str, what: &str) -> PathBuf {
     assert!(p.exists(), "{} missing: run tools/setup (it installs {what} there)", p.display());
     p
 }
+
+/// `brdf-shop export --material M --format F --out P`, which must succeed.
+pub fn export(format: &str, material: &Path, out: &Path) {
+    let (code, _, err) =
+        run(&["export", "--material", material.to_str().unwrap(), "--format", format, "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "export {format}: {err}");
+}
