@@ -389,28 +389,9 @@ fn blender_places_mesh_files_like_brdf_shop() {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let theirs = dir.path().join("bunny-reference.exr");
-    reference_mesh(&material, &bunny, &theirs);
+    common::reference_mesh(&material, &bunny, &theirs);
     let count = |p: &Path| common::read_exr(p).pixels.iter().filter(|p| p[3] >= 0.5).count() as f64;
     let (a, b) = (count(&ours), count(&theirs));
     println!("bunny coverage: cycles {a} pixels, reference {b}");
     assert!(b > 200.0 && (a - b).abs() <= 0.02 * b, "cycles {a} against reference {b}");
-}
-
-fn reference_mesh(material: &Path, mesh: &Path, out: &Path) {
-    let (code, _, err) = common::run(&[
-        "reference",
-        "--material",
-        material.to_str().unwrap(),
-        "--env",
-        common::asset("hdri/studio.exr").to_str().unwrap(),
-        "--mesh",
-        mesh.to_str().unwrap(),
-        "--size",
-        "40x40",
-        "--spp",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
 }

@@ -197,22 +197,7 @@ fn mitsuba_places_mesh_files_like_brdf_shop() {
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
     let reference = dir.path().join("bunny-reference.exr");
-    let (code, _, err) = common::run(&[
-        "reference",
-        "--material",
-        material.to_str().unwrap(),
-        "--env",
-        common::asset("hdri/studio.exr").to_str().unwrap(),
-        "--mesh",
-        bunny.to_str().unwrap(),
-        "--size",
-        "40x40",
-        "--spp",
-        "1",
-        "--out",
-        reference.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    common::reference_mesh(&material, &bunny, &reference);
     let count = |p: &Path| common::read_exr(p).pixels.iter().filter(|p| p[3] >= 0.5).count() as f64;
     let (a, b) = (count(&ours), count(&reference));
     println!("bunny coverage: mitsuba {a} pixels, reference {b}");

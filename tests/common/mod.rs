@@ -259,3 +259,24 @@ pub fn export(format: &str, material: &Path, out: &Path) {
         run(&["export", "--material", material.to_str().unwrap(), "--format", format, "--out", out.to_str().unwrap()]);
     assert_eq!(code, 0, "export {format}: {err}");
 }
+
+/// `brdf-shop reference` of `material` on the mesh file `mesh` under studio.exr, 40×40 at 1 spp:
+/// enough to compare where an exporter places a mesh (its coverage), which must succeed.
+pub fn reference_mesh(material: &Path, mesh: &Path, out: &Path) {
+    let (code, _, err) = run(&[
+        "reference",
+        "--material",
+        material.to_str().unwrap(),
+        "--env",
+        asset("hdri/studio.exr").to_str().unwrap(),
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--size",
+        "40x40",
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
