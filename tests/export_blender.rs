@@ -33,25 +33,6 @@ fn python() -> PathBuf {
 /// Test image size.
 const SIZE: &str = "64x64";
 
-fn reference(material: &Path, env: &Path, spp: u32, out: &Path) {
-    let (code, _, err) = common::run(&[
-        "reference",
-        "--material",
-        material.to_str().unwrap(),
-        "--env",
-        env.to_str().unwrap(),
-        "--mesh",
-        "sphere",
-        "--size",
-        SIZE,
-        "--spp",
-        &spp.to_string(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "reference {}: {err}", out.display());
-}
-
 /// A uniform white environment (the white furnace), 16×8 texels of 1.
 fn constant_env(path: &Path) {
     exr::prelude::write_rgb_file(path, 16, 8, |_, _| (1.0f32, 1.0f32, 1.0f32)).unwrap();
@@ -254,7 +235,7 @@ fn blender_renders_what_reference_renders() {
     println!("  {:44} {:>10} {:>9} {:>9}  result", "case", "spp", "rel. L1", "bound");
     for (k, c) in cases.iter().enumerate() {
         let reference_out = d.join(format!("case{k}-reference.exr"));
-        reference(&c.material, &c.env, c.spp.1, &reference_out);
+        common::reference(&c.material, &c.env, "sphere", SIZE, c.spp.1, &reference_out);
         let a = common::read_exr(&outs[k]);
         let b = common::read_exr(&reference_out);
         let covered = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p[3] >= 0.5 && q[3] >= 0.5).count();

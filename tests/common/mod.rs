@@ -260,23 +260,29 @@ pub fn export(format: &str, material: &Path, out: &Path) {
     assert_eq!(code, 0, "export {format}: {err}");
 }
 
-/// `brdf-shop reference` of `material` on the mesh file `mesh` under studio.exr, 40×40 at 1 spp:
-/// enough to compare where an exporter places a mesh (its coverage), which must succeed.
-pub fn reference_mesh(material: &Path, mesh: &Path, out: &Path) {
+/// `brdf-shop reference --material M --env E --mesh MESH --size WxH --spp N --out O`, which must
+/// succeed: the CPU image an exporter's render is compared with.
+pub fn reference(material: &Path, env: &Path, mesh: &str, size: &str, spp: u32, out: &Path) {
     let (code, _, err) = run(&[
         "reference",
         "--material",
         material.to_str().unwrap(),
         "--env",
-        asset("hdri/studio.exr").to_str().unwrap(),
+        env.to_str().unwrap(),
         "--mesh",
-        mesh.to_str().unwrap(),
+        mesh,
         "--size",
-        "40x40",
+        size,
         "--spp",
-        "1",
+        &spp.to_string(),
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 0, "reference {}: {err}", out.display());
+}
+
+/// [`reference`] of `material` on the mesh file `mesh` under studio.exr, 40×40 at 1 spp: enough to
+/// compare where an exporter places a mesh (its coverage).
+pub fn reference_mesh(material: &Path, mesh: &Path, out: &Path) {
+    reference(material, &asset("hdri/studio.exr"), mesh.to_str().unwrap(), "40x40", 1, out);
 }
