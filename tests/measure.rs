@@ -193,8 +193,9 @@ fn error_vs_time_quick_trends() {
                 assert!(k < f, "{env} {mat}: key {k} not below fis {f} at {spp} spp");
             }
             // Within 8 % at 8 spp on the paper's materials. The painted reciprocal ones on studio
-            // are not (0.153 each: the lamp's reflection in their sharp lobes), on venice they are
-            // (0.044, 0.038); their frontier goal is counted below.
+            // are not (`painted-aniso` 0.111, its streak seeing the lamp as tiles; `painted-tilted`
+            // 0.153, mostly its rough lobe's, whose residual keeps the softbox below 16 spp), on
+            // venice they are (0.044, 0.038); their frontier goal is counted below.
             let k8 = err(env, mat, Estimator::Key, 8);
             if !mat.starts_with("painted") || *env == "venice.exr" {
                 assert!(k8 <= 0.08, "{env} {mat}: key at 8 spp {k8}, over 8 %");
@@ -208,9 +209,11 @@ fn error_vs_time_quick_trends() {
         assert!(k1 <= 0.08, "{env} rough-gm: key at 1 spp {k1}, over 8 %");
     }
     // The frontier goal on the painted reciprocal scenes: `key` within 8 % at no more whole-frame
-    // GPU time than `fis` at 8 spp. Counted and printed, not asserted: on lavapipe at 32² `key`'s
-    // cheapest whole frame (2.2–2.5 ms) costs more than `fis`-8's (1.9–2.1 ms) on every scene, so it
-    // holds on none of them (see the summary's table).
+    // GPU time than `fis` at 8 spp. Counted and printed, not asserted: on lavapipe at 32² both
+    // estimators' whole frames are 2.1–3.4 ms, mostly the G-buffer pass's fixed cost, and `key`'s
+    // filter pass for the rough lobes costs more than the margin, so the count follows the frames'
+    // noise (1 of the 4 here: venice's `painted-aniso`, 0.068 at `fis`-8's time); studio's two are
+    // over 8 % at 8 spp (above).
     let painted: Vec<_> = rows.iter().filter(|r| r.material.starts_with("painted")).cloned().collect();
     assert_eq!(painted.len(), plan.envs.len() * 2 * 4 * plan.spps.len(), "two painted materials");
     let (within, scenes) = error_vs_time::goal_count(&painted, |r| r.ms_median);

@@ -1,5 +1,6 @@
 //! `report error-vs-time`: for scenes (environment × material) and sample counts, each estimator's
-//! GPU time (the whole frame, first command to last, every clear and copy included: `key` moves work
+//! GPU time (the whole frame, first command to last, every clear and copy included, its passes not
+//! timed apart: `key` moves work
 //! between passes that `fis` does elsewhere, so only whole frames compare; median of repeated frames
 //! taken in rounds that interleave a scene's estimators and sample counts) and its error against the
 //! converged CPU reference
@@ -205,6 +206,15 @@ pub type Decisions = Vec<(String, String)>;
 /// Runs the plan; `progress` shows a bar over the scenes. Returns the rows and, per map, the `key`
 /// estimator's key-light decision.
 pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Decisions)> {
+    // The sweep reads whole frames only: its frames time no pass (`Renderer::time_passes`), so
+    // that no estimator pays for timestamps by its count of passes.
+    let time_passes = std::mem::replace(&mut renderer.time_passes, false);
+    let result = sweep(renderer, plan, out, progress);
+    renderer.time_passes = time_passes;
+    result
+}
+
+fn sweep(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Result<(Vec<Row>, Decisions)> {
     let cache = out.join("cache");
     let mesh = Mesh::sphere();
     renderer.set_mesh(&mesh)?;
@@ -258,9 +268,19 @@ pub fn run(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> 
                 }
                 images.push(renderer.render(m, &settings(c))?.image);
             }
+            // The rounds run the list backwards and forwards in turn (the first one backwards,
+            // after the untimed frames' forward run), so that each frame follows a neighbour of its
+            // own configuration in the list, and never the longest frame (`mis` at the most
+            // samples, tens of milliseconds) of a run in the other order: a frame after that one
+            // runs slower on lavapipe (at 32², the first configuration, `key` at 1 spp, took 4.0 ms
+            // there against 3.1 ms for the next, 4 spp, on studio's sharp lobe).
+            let rounds = plan.repeats.max(1);
             let mut times = vec![Vec::new(); configs.len()];
-            for _ in 0..plan.repeats.max(1) {
-                for (k, &c) in configs.iter().enumerate() {
+            for round in 0..rounds {
+                let order: Vec<usize> =
+                    if round % 2 == 0 { (0..configs.len()).rev().collect() } else { (0..configs.len()).collect() };
+                for k in order {
+                    let c = configs[k];
                     if crate::interrupt::requested() {
                         return Err(Error::input("error-vs-time", "interrupted"));
                     }
@@ -412,7 +432,7 @@ pub fn summary(
     let scenes = scenes(rows);
     let mut s = format!(
         "# Error against GPU time\n\nDevice: {device}. Sphere, {0}x{0}, default camera; reference: CPU MIS at {1} spp. \
-         Error: relative L1 over the object. GPU ms: the whole frame, first command to last (median of {2} frames, in rounds interleaving each scene's estimators and sample counts).\n\n",
+         Error: relative L1 over the object. GPU ms: the whole frame, first command to last, its passes not timed apart (median of {2} frames, in rounds interleaving each scene's estimators and sample counts, backwards and forwards in turn).\n\n",
         plan.size, plan.reference_spp, plan.repeats
     );
     s.push_str("## The default estimator (`key`)\n\n");

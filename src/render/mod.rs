@@ -104,6 +104,11 @@ impl Passes {
 pub struct Renderer {
     /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
     pub scalar_lobes: bool,
+    /// Time each pass of a frame (`Frame::timings`, `--timings`, `bench`, the editor's panel) besides
+    /// the whole frame; false times the whole frame alone (`Frame::timings` empty), as the
+    /// error-vs-time sweep does: two timestamps a frame instead of two a pass (each a wait for the
+    /// queue on lavapipe, `vk::query`).
+    pub time_passes: bool,
     /// Skip the faces a closed mesh hides from an eye outside it (`Mesh::hidden_faces`); the image
     /// is the same either way (tests compare the two).
     pub cull_hidden_faces: bool,
@@ -189,6 +194,7 @@ impl Renderer {
         };
         Ok(Renderer {
             scalar_lobes: false,
+            time_passes: true,
             cull_hidden_faces: true,
             light_reach_test: true,
             wide_lights: true,
@@ -366,7 +372,7 @@ impl Renderer {
             self.readback = Some(readback::buffer_for(&self.ctx, &t.accum)?);
         }
         let ring = self.ring.as_mut().expect("ring lives until drop");
-        ring.begin(&self.ctx, 1, 1)?;
+        ring.begin(&self.ctx, 1, 1, self.time_passes)?;
         let t = self.views[View::Mesh as usize].as_ref().expect("checked above");
         let image = if self.refined > 0 { &t.sum } else { &t.accum };
         readback::record(
@@ -403,7 +409,7 @@ impl Renderer {
         let ring = self.ring.as_mut().expect("ring lives until drop");
         // Passes: G-buffer, background, diffuse, a pass per lobe, denoise, canvas, compose, and the
         // caller's window copy and panel (refinement frames have fewer).
-        ring.begin(&self.ctx, 8 + n, 10 + n)?;
+        ring.begin(&self.ctx, 8 + n, 10 + n, self.time_passes)?;
         if let Err(e) = ring.current().upload(&self.ctx, "material", &gpu::material_bytes(material)) {
             let _ = ring.abandon(&self.ctx);
             return Err(e);

@@ -192,9 +192,10 @@ impl FrameRing {
     }
 
     /// Waits for the next slot's previous frame, readies its pool (reset; grown to `sets` sets) and
-    /// queries (room for `passes` passes), and begins its command buffer with the queries reset.
+    /// queries (room for `passes` passes), and begins its command buffer with the queries reset;
+    /// `time_passes`: the frame times each pass, else the whole frame alone (`Timestamps::reset`).
     /// That earlier frame's GPU times join the finished ones.
-    pub fn begin(&mut self, ctx: &Context, sets: u32, passes: u32) -> Result<()> {
+    pub fn begin(&mut self, ctx: &Context, sets: u32, passes: u32, time_passes: bool) -> Result<()> {
         if self.recording {
             return Err(crate::Error::NoDevice("a frame was begun twice".into()));
         }
@@ -213,7 +214,7 @@ impl FrameRing {
                 .map_err(vk_err("vkResetCommandBuffer"))?;
             raw.begin_command_buffer(f.cmd, &begin).map_err(vk_err("vkBeginCommandBuffer"))?;
         }
-        f.timestamps.reset(ctx, f.cmd);
+        f.timestamps.reset(ctx, f.cmd, time_passes);
         self.count += 1;
         f.number = self.count;
         self.recording = true;

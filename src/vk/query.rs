@@ -1,6 +1,6 @@
 //! Timestamp queries: a pair around the whole frame (the first written right after the reset, the
-//! last just before the command buffer ends, so every clear and copy between passes is inside it) and
-//! two per pass, reset inside the command buffer, read after the fence with `TYPE_64 | WAIT`, masked
+//! last just before the command buffer ends, so every clear and copy between passes is inside it) and,
+//! in a frame that times its passes, two per pass; reset inside the command buffer, read after the fence with `TYPE_64 | WAIT`, masked
 //! to `timestampValidBits` and scaled by `timestampPeriod`.
 //!
 //! On a CPU device (lavapipe) each timestamp is followed by a copy of its result with `WAIT` into a
@@ -28,6 +28,8 @@ pub struct Timestamps {
     names: Vec<String>,
     /// Whether the whole frame's closing timestamp was written (`end_frame`).
     ended: bool,
+    /// Whether this frame times its passes (`reset`); false: the whole frame's pair alone.
+    passes: bool,
 }
 
 /// One pass's GPU time.
@@ -88,14 +90,17 @@ impl Timestamps {
         } else {
             None
         };
-        Ok(Timestamps { pool, capacity, settle, names: Vec::new(), ended: false })
+        Ok(Timestamps { pool, capacity, settle, names: Vec::new(), ended: false, passes: true })
     }
 
     /// Resets every query and writes the whole frame's first timestamp; recorded first in the
-    /// command buffer.
-    pub fn reset(&mut self, ctx: &Context, cmd: vk::CommandBuffer) {
+    /// command buffer. `passes`: the frame also times each pass ([`Timestamps::time`]); false records
+    /// the whole frame's pair alone, two timestamps where a frame of `n` passes has `2 n + 2` (on
+    /// lavapipe each is a wait for the queue, see the module's comment).
+    pub fn reset(&mut self, ctx: &Context, cmd: vk::CommandBuffer, passes: bool) {
         self.names.clear();
         self.ended = false;
+        self.passes = passes;
         // SAFETY: `cmd` is recording outside a render pass; the pool is live.
         unsafe { ctx.raw().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
         self.write(ctx, cmd, 0);
@@ -124,7 +129,8 @@ impl Timestamps {
         }
     }
 
-    /// Records `pass` between two timestamps (skipped when the pool is full).
+    /// Records `pass` between two timestamps (skipped when the pool is full or the frame does not
+    /// time its passes).
     pub fn time<T>(
         &mut self,
         ctx: &Context,
@@ -133,7 +139,7 @@ impl Timestamps {
         pass: impl FnOnce() -> Result<T>,
     ) -> Result<T> {
         let index = FRAME_QUERIES + 2 * self.names.len() as u32;
-        let timed = index + 1 < self.capacity;
+        let timed = self.passes && index + 1 < self.capacity;
         if timed {
             self.write(ctx, cmd, index);
         }
