@@ -16,7 +16,7 @@
 layout(constant_id = 0) const bool BLOCKS = false;
 // Over the image in groups of 8 × 8, or (BLOCKS) over the list in groups of 64: the same size.
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 layout(set = 0, binding = 1, rgba32f) writeonly uniform image2D accum;
 layout(set = 0, binding = 2) uniform sampler2D env_tex;
 
@@ -35,13 +35,13 @@ void main() {
         [[unroll]] for (int k = 0; k < 4; k++) {
             ivec2 p = corner + ivec2(k & 1, k >> 1);
             ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-            if (inside(p) && !(imageLoad(gnrm, q).w > 0.5)) imageStore(accum, p, background(p));
+            if (inside(p) && imageLoad(gnrm, q).x == 0u) imageStore(accum, p, background(p));
         }
         return;
     }
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (!inside(p)) return;
-    if (imageLoad(gnrm, p).w > 0.5) {
+    if (imageLoad(gnrm, p).x != 0u) {
         imageStore(accum, p, vec4(0.0, 0.0, 0.0, 1.0));
     } else {
         imageStore(accum, p, background(p));

@@ -26,7 +26,7 @@ layout(constant_id = 0) const bool LATER = false;
 // blocks leaves it to the next frame that keeps the G-buffer and needs it (`compact::Start`): its
 // appends cost about 1 ms of a 512² frame on llvmpipe (the goal scene).
 layout(constant_id = 1) const bool PIXELS = true;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
 layout(std430, set = 0, binding = 1) buffer Pixels { uint count; uint groups[3]; uint at[]; } pixels;
 // The same for the 2 × 2 blocks of pixels with any pixel listed, each by its first listed pixel
@@ -52,7 +52,7 @@ layout(std430, set = 0, binding = 7) buffer BackgroundBlocks { uint count; uint 
 // `object`: the G-buffer holds the mesh there (background.comp's test).
 bool listed_at(ivec2 p, out vec3 n, out bool object) {
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    vec4 N = imageLoad(gnrm, q);
+    vec4 N = gbuffer_texel(imageLoad(gnrm, q).x);
     object = N.w > 0.5;
     return facing(q, N, n) && inside(p);
 }

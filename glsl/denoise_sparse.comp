@@ -40,7 +40,7 @@ layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
 // The G-buffer: each pixel's normal and whether it is shaded (`facing` in pass.glsl, as compact.comp
 // listed it), read here instead of an image of every pixel's normal and mark written by
 // compact.comp: one full-size image store less (about 0.8 ms at 512² on llvmpipe).
-layout(set = 0, binding = 3, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 3, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 // DIFFUSE: the frame's compact pass left the listed pixels at (0, 0, 0, 1) (`compact.comp` LATER),
 // and each pixel takes the diffuse term here first, the same arithmetic (albedo fparams.rgb,
 // params.x the key estimator's lights; stand-ins bound otherwise). Added before the filter's sums,
@@ -67,7 +67,7 @@ vec3 tag_normal(float tag) {
 // Pixel p's normal, and whether it is shaded (listed by `compact.comp`).
 bool pixel_normal(ivec2 p, out vec3 n) {
     ivec2 q = min(p, ivec2(pc.size.xy) - 1);
-    return facing(q, imageLoad(gnrm, q), n) && inside(p);
+    return facing(q, gbuffer_texel(imageLoad(gnrm, q).x), n) && inside(p);
 }
 
 // Whether block i (0 … 3 for the blocks −1 … +2) is in the window along a coordinate of parity `odd`.

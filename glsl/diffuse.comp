@@ -11,7 +11,7 @@
 #include "diffuse.glsl"
 // Over the list of shaded pixels (compact.comp).
 layout(local_size_x = 64) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(std430, set = 0, binding = 2) readonly buffer Sh { vec4 c[9]; } sh;
 // params.x = 1: the key estimator's lights, added as distant sources (`GpuKeyLights::cones`).
@@ -22,7 +22,7 @@ void main() {
     READ_DIFFUSE_LIGHT(d, sh, lights, pc.params.x != 0u);
     ivec2 p;
     if (!listed_pixel(p)) return;
-    vec3 nrm = normalize(imageLoad(gnrm, p).xyz);
+    vec3 nrm = gbuffer_texel(imageLoad(gnrm, p).x).xyz;
     vec4 acc = imageLoad(accum, p);
     acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, nrm);
     imageStore(accum, p, acc);

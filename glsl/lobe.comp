@@ -28,8 +28,8 @@
 // vec4(direction, 0), vec4(power / 4, 0), and the light term is
 // Σ F(ω) cos θ P, exact to second order in the light's size over the lobe's; no MIS, no light noise.
 // REACH_TEST (LIGHTS, a narrow lobe of one component, `lobe::Variant::reach`; a facet lobe tested in
-// its facet frame): a pixel whose lobe cannot reach any light (`lobe_sees_lights`) skips the light term: no light samples, and its BRDF samples
-// do not look for the lights. With POINTS (tiles) each light's points run only at the pixels within
+// its facet frame): a pixel whose lobe cannot reach any light (`lobe_sees_lights`) skips the light
+// term: no light samples, and its BRDF samples do not look for the lights. With POINTS (tiles) each light's points run only at the pixels within
 // that light's reach (`near_points`, `block_points`): light k's rows of light_set end at pc.light[k].
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
@@ -85,7 +85,7 @@ const bool ANY_OUTPUT = OUTPUT == 4u;
 // run on llvmpipe, so only a constant can take it away).
 layout(constant_id = 13) const uint LIGHT_SLOTS = 4u;
 
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2) uniform sampler2D env_tex;
 #define MATERIAL_BINDING 3
@@ -620,7 +620,7 @@ void block_points(ivec2 c, GpuLobe l, vec4 q) {
         Frame f;
         vec3 wo;
         // Set for a pixel past the image's edge too (its G-buffer texel clamped; it takes nothing).
-        bool facing_eye = shaded(px, imageLoad(gnrm, min(px, ivec2(pc.size.xy) - 1)), f, wo);
+        bool facing_eye = shaded(px, gbuffer_texel(imageLoad(gnrm, min(px, ivec2(pc.size.xy) - 1)).x), f, wo);
         bool in_reach = inside(px) && facing_eye;
         vec3 b = ROTATED ? quat_rotate(q, wo) : wo;
         uint bits = REACH_TEST ? near_lights(f, l.shape, b) : 1u;
@@ -677,7 +677,7 @@ void main() {
     if (!listed_pixel(p)) return;
     Frame f;
     vec3 wo;
-    if (!shaded(p, imageLoad(gnrm, p), f, wo)) return;
+    if (!shaded(p, gbuffer_texel(imageLoad(gnrm, p).x), f, wo)) return;
     // Frame 0 takes the set as it is; frame `seed` > 0 shifts it by a hash of the seed (the
     // same for every pixel, so a frame's error stays smooth, and the mean over frames converges).
     // A lobe pass into the filter (OUTPUT 1; 2, 3 sparse: per block) shifts the set per pixel
@@ -765,7 +765,7 @@ void main() {
                 Frame fk;
                 vec3 wk;
                 vec3 bk = vec3(0.0);
-                bool in_reach = inside(px) && shaded(px, imageLoad(gnrm, px), fk, wk);
+                bool in_reach = inside(px) && shaded(px, gbuffer_texel(imageLoad(gnrm, px).x), fk, wk);
                 if (in_reach) {
                     bk = ROTATED ? quat_rotate(q, wk) : wk;
                     in_reach = !REACH_TEST || lobe_sees_lights(fk, l.shape, q, wk);

@@ -9,7 +9,7 @@
 #include "pass.glsl"
 // Over the list of shaded pixels (compact.comp).
 layout(local_size_x = 64) in;
-layout(set = 0, binding = 0, rgba32f) readonly uniform image2D gnrm;
+layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2) uniform sampler2D env_tex;
 #define MATERIAL_BINDING 3
@@ -31,7 +31,7 @@ void main() {
     if (!listed_pixel(p)) return;
     Frame f;
     vec3 wo;
-    if (!shaded(p, imageLoad(gnrm, p), f, wo)) return;
+    if (!shaded(p, gbuffer_texel(imageLoad(gnrm, p).x), f, wo)) return;
     uint pixel = uint(p.y) * pc.size.x + uint(p.x);
     vec4 rot0 = vec4(hash_unit(pixel * 5u), hash_unit(pixel * 5u + 1u), hash_unit(pixel * 5u + 2u), 0.0);
     vec2 rot1 = vec2(hash_unit(pixel * 5u + 3u), hash_unit(pixel * 5u + 4u));

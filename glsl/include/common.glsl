@@ -40,4 +40,26 @@ uint hash_u32(uint v) {
 
 float hash_unit(uint v) { return float(hash_u32(v) >> 8) * (1.0 / 16777216.0); }
 
+// The G-buffer texel (`R32_UINT`, 4 bytes a pixel): 0 off the object (the clear value), else the
+// octahedral code of the world normal n (any length; a zero normal codes +z), 16 bits a coordinate
+// in [0, 65534], the first plus 1 in the low half so that no normal codes 0. A coordinate's step,
+// 2/65534, turns the decoded normal by at most about 4.3·10⁻⁵ rad.
+uint gbuffer_code(vec3 n) {
+    float s = abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = s > 0.0 ? n.xy / s : vec2(0.0);
+    if (n.z < 0.0) e = (1.0 - abs(e.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    uvec2 q = uvec2(round(clamp(e * 0.5 + 0.5, 0.0, 1.0) * 65534.0));
+    return (q.x + 1u) | (q.y << 16);
+}
+
+// A G-buffer code as the texel the passes take: vec4(unit normal, 1) on the object, vec4(0, 0, 1, 0)
+// off it.
+vec4 gbuffer_texel(uint code) {
+    vec2 e = vec2(float(max(code & 0xffffu, 1u) - 1u), float(code >> 16)) * (2.0 / 65534.0) - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    vec2 folded = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    n.xy = n.z < 0.0 ? folded : n.xy;
+    return code == 0u ? vec4(0.0, 0.0, 1.0, 0.0) : vec4(n * inversesqrt(dot(n, n)), 1.0);
+}
+
 #endif

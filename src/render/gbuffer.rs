@@ -1,4 +1,4 @@
-//! Pass 0: rasterises the mesh into the G-buffer (the world normal, its alpha marking the object;
+//! Pass 0: rasterises the mesh into the G-buffer (the world normal's octahedral code, 0 off the object;
 //! the passes take ω_o from the pixel's camera ray), so that every shading pass costs the same
 //! whatever the triangle count.
 
@@ -66,7 +66,7 @@ impl GBufferPass {
             depth_access, // the previous frame's depth tests
             depth_access,
         );
-        let clear = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
+        let clear = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
         let colors = [vk::RenderingAttachmentInfo::default()
             .image_view(normal.view)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)

@@ -1,5 +1,5 @@
-//! The images a frame renders into, per image size: the G-buffer (world normal with the object's
-//! mark in alpha, depth), the `RGBA32F` accumulation image the shading passes add into, and
+//! The images a frame renders into, per image size: the G-buffer (the world normal's octahedral
+//! code, 0 off the object; depth), the `RGBA32F` accumulation image the shading passes add into, and
 //! the running sum of progressive refinement. They persist from frame to frame (per view).
 
 use ash::vk;
@@ -7,7 +7,9 @@ use ash::vk;
 use crate::vk::{barrier, Buffer, Context, Image};
 use crate::Result;
 
-pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// The G-buffer: the world normal's octahedral code, 0 off the object (`gbuffer_code` in
+/// `glsl/include/common.glsl`), 4 bytes a pixel.
+pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 pub struct Targets {
