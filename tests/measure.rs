@@ -173,15 +173,15 @@ fn error_vs_time_quick_trends() {
             }
             // `key` can start near its floor (studio's sharp lobe as the lamp's points: 0.023 at
             // 1 spp), so it must improve and reach 2 % instead; the painted reciprocal materials 3 %
-            // (their studio scenes measure 0.023 and 0.027 at 128 spp, venice's 0.011).
+            // (their studio scenes measure 0.019 and 0.027 at 128 spp, venice's 0.011).
             let (a, b) = (err(env, mat, Estimator::Key, first), err(env, mat, Estimator::Key, last));
             let bound = if mat.starts_with("painted") { 0.03 } else { 0.02 };
             assert!(b < a && b <= bound, "{env} {mat} key: {a} at {first} spp, {b} at {last}");
         }
     }
     // The default `key` estimator beats the paper's at equal samples, at 8 and at the most, on every
-    // scene, and at 8 spp it is within the frontier goal's 8 % on every scene (studio's medium lobe:
-    // 0.116 by MIS light samples, 0.045 as tiles; the largest is studio's sharp lobe, 0.068); and the
+    // scene, and at 8 spp it is within the frontier goal's 8 % on every scene (the largest is
+    // venice's rough lobe, 0.045; studio's medium lobe, 0.030, sees the lamp as tiles); and the
     // paper's `fis` renders what `FIS_AT_8` records: lavapipe renders it deterministically (to 1e-3
     // relative: a different LLVM may reorder f32 arithmetic, a changed estimator moves them by far
     // more).
