@@ -29,8 +29,9 @@
 // Σ F(ω) cos θ P, exact to second order in the light's size over the lobe's; no MIS, no light noise.
 // REACH_TEST (LIGHTS, a narrow lobe of one component, `lobe::Variant::reach`; a facet lobe tested in
 // its facet frame): a pixel whose lobe cannot reach any light (`lobe_sees_lights`) skips the light
-// term: no light samples, and its BRDF samples do not look for the lights. With POINTS (tiles) each light's points run only at the pixels within
-// that light's reach (`near_points`, `block_points`): light k's rows of light_set end at pc.light[k].
+// term: no light samples, and its BRDF samples do not look for the lights. With POINTS (tiles) each
+// light's points run only at the pixels within that light's reach (`near_points`, `block_points`):
+// light k's rows of light_set end at pc.light[k].
 // Frames: seed (params.z) 0 takes the set as it is; a later frame shifts it by a hash of its seed,
 // the same for every pixel (the light samples likewise).
 // FILTERED (OUTPUT 1; fparams.y 2 for a hash per pixel always; a rough lobe, render/denoise.rs): the

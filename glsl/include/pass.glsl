@@ -39,9 +39,9 @@ vec3 camera_ray(ivec2 p) {
 
 bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
 
-// Whether a G-buffer texel N (`gbuffer_texel`: the normal, alpha 1 marking the object) holds the mesh facing the
-// eye, with its shading frame and ω_o (local): the pixels `compact.comp` lists and the mesh passes
-// shade. ω_o is the reverse of the pixel's camera ray, on which the surface point lies (the
+// Whether a G-buffer texel N (`gbuffer_texel`: the normal, alpha 1 marking the object) holds the
+// mesh facing the eye, with its shading frame and ω_o (local): the pixels `compact.comp` lists and
+// the mesh passes shade. ω_o is the reverse of the pixel's camera ray, on which the surface point lies (the
 // G-buffer keeps no position: one image load a pixel instead of two, and about 5 ms
 // less rasterising at 512² on llvmpipe).
 bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
