@@ -22,7 +22,6 @@ void main() {
     READ_DIFFUSE_LIGHT(d, sh, lights, pc.params.x != 0u);
     ivec2 p;
     if (!listed_pixel(p)) return;
-    // normalize as `facing` does in compact.comp, which draws the same term bit for bit.
     vec3 nrm = normalize(gbuffer_texel(imageLoad(gnrm, p).x).xyz);
     vec4 acc = imageLoad(accum, p);
     acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, nrm);

@@ -53,14 +53,14 @@ uint gbuffer_code(vec3 n) {
     return (q.x + 1u) | (q.y << 16);
 }
 
-// A G-buffer code as the texel the passes take: vec4(unit normal, 1) on the object, vec4(0, 0, 1, 0)
-// off it.
+// A G-buffer code as the texel the passes take: vec4(normal, 1) on the object (its length between
+// 1/√3 and 1: the readers normalise it, `shaded` and `facing` in pass.glsl), vec4(0, 0, 1, 0) off it.
 vec4 gbuffer_texel(uint code) {
     vec2 e = vec2(float(max(code & 0xffffu, 1u) - 1u), float(code >> 16)) * (2.0 / 65534.0) - 1.0;
     vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
     vec2 folded = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
     n.xy = n.z < 0.0 ? folded : n.xy;
-    return code == 0u ? vec4(0.0, 0.0, 1.0, 0.0) : vec4(n * inversesqrt(dot(n, n)), 1.0);
+    return code == 0u ? vec4(0.0, 0.0, 1.0, 0.0) : vec4(n, 1.0);
 }
 
 #endif
