@@ -137,7 +137,7 @@ fn control_rows_within_five_percent_are_stable() {
 /// below a third of the error at one sample per pixel — QMC on these scenes falls faster than
 /// 1/√N, which would give 1/√128 ≈ 0.09), and `key` improves to within 2 % relative L1; on the sun
 /// map, `fis` at 8 spp beats `plain` at 8 spp on the medium and rough lobes; `key` is within the
-/// frontier goal's 8 % at 8 spp on every scene and, for the rough lobe, at 1 spp. Also writes and
+/// frontier goal's 8 % at 8 spp on every scene but one (below) and, for the rough lobe, at 1 spp. Also writes and
 /// checks the CSV, plot and summary.
 #[test]
 fn error_vs_time_quick_trends() {
@@ -192,12 +192,13 @@ fn error_vs_time_quick_trends() {
                 eprintln!("{env} {mat} {spp} spp: key {k:.4}, fis {f:.4}");
                 assert!(k < f, "{env} {mat}: key {k} not below fis {f} at {spp} spp");
             }
-            // Within 8 % at 8 spp on the paper's materials. The painted reciprocal ones on studio
-            // are not (`painted-aniso` 0.111, its streak seeing the lamp as tiles; `painted-tilted`
-            // 0.153, mostly its rough lobe's, whose residual keeps the softbox below 16 spp), on
-            // venice they are (0.044, 0.038); their frontier goal is counted below.
+            // Within 8 % at 8 spp on every scene but studio's `painted-tilted`: 0.089 there, its
+            // α 0.27 lobe tilted 47° off the mirror point, whose filter's blur is the larger part
+            // of it (the mean of 64 frames' seeds is 0.081; with σ 0.2 α instead of 0.3 α, 0.046,
+            // but the rough lobes' 1-spp frames are over 8 % then). `painted-aniso` there is 0.071,
+            // venice's painted scenes 0.044 and 0.038.
             let k8 = err(env, mat, Estimator::Key, 8);
-            if !mat.starts_with("painted") || *env == "venice.exr" {
+            if !(*env == "studio.exr" && *mat == "painted-tilted") {
                 assert!(k8 <= 0.08, "{env} {mat}: key at 8 spp {k8}, over 8 %");
             }
         }

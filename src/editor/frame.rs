@@ -230,19 +230,15 @@ impl App {
         let mesh_planned = plan.mesh.is_some();
         let canvas_planned = plan.canvas.is_some();
         let shown = gpu.frame(&plan)?;
-        let mut stood_in = false;
         let presented = match shown {
             Shown::Presented { pixels, mesh } => {
-                // A mesh view that waited for its pipelines is rendered again when they are built;
-                // one drawn with stand-ins is settled again then (as if previewed).
+                // A mesh view that waited for its pipelines is rendered again when they are built.
                 let mesh_waiting = mesh == Recorded::Waiting;
                 self.mesh_waiting = mesh_waiting;
                 if !mesh_waiting {
                     self.mesh_key = Some(mesh_key);
                     if mesh_planned {
-                        stood_in = mesh == Recorded::StandIn;
-                        self.mesh_stand_in = stood_in;
-                        self.mesh_previewed = mesh_previewed || stood_in;
+                        self.mesh_previewed = mesh_previewed;
                     }
                 }
                 if canvas_planned {
@@ -263,16 +259,11 @@ impl App {
         self.apply_panel(actions)?;
         let kind = match kind {
             _ if presented && self.mesh_waiting => FrameKind::Waiting,
-            // Not the settled view yet: that is the settle frame after the build.
-            FrameKind::Settle if stood_in => FrameKind::StandIn,
             k => k,
         };
         // The frames that rendered the mesh view's `key` image at one scale time the preview's model.
         let waited = presented && self.mesh_waiting;
-        let sample = mesh_planned
-            && !waited
-            && one_scale
-            && matches!(kind, FrameKind::Interaction | FrameKind::Settle | FrameKind::StandIn);
+        let sample = mesh_planned && !waited && one_scale && matches!(kind, FrameKind::Interaction | FrameKind::Settle);
         let scale = if mesh_planned { mesh_scale } else { canvas_scale };
         let refine_sample = kind == FrameKind::Refinement && !canvas_planned;
         let spp = if waited { 0 } else { mesh_spp };

@@ -178,11 +178,9 @@ impl ApplicationHandler for App {
         }
         // Idle: first render the previewed views at full size (a light dragged on a refined view
         // previews the canvas alone, and nothing else would ask for that frame) — once no button is
-        // held: a pause in a drag waits for the next event (`preview::steps`). A mesh view drawn with
-        // stand-ins is settled when the build of its own pipelines wakes the loop (`user_event`).
+        // held: a pause in a drag waits for the next event (`preview::steps`).
         if self.shown && (self.mesh_previewed || self.canvas_previewed) {
-            let wait_build = self.mesh_stand_in && !self.canvas_previewed;
-            if !wait_build && !self.state.as_ref().is_some_and(|s| s.dragging()) {
+            if !self.state.as_ref().is_some_and(|s| s.dragging()) {
                 self.request_redraw();
             }
             return;

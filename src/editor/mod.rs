@@ -84,9 +84,6 @@ struct App {
     /// The mesh view waits for a lobe pipeline being built in the background (it shows its last
     /// image; the build's end wakes the loop).
     mesh_waiting: bool,
-    /// The mesh view was last drawn with stand-ins (`Recorded::StandIn`): it settles again when the
-    /// build of its own pipelines wakes the loop, not before (nor quits).
-    mesh_stand_in: bool,
     canvas_key: Option<CanvasKey>,
     /// The BRDF graph's curves and what they were computed for.
     curves: Option<(CanvasKey, graph::Curves)>,
@@ -501,7 +498,6 @@ pub fn run(opts: Options) -> Result<()> {
         done: false,
         mesh_key: None,
         mesh_waiting: false,
-        mesh_stand_in: false,
         canvas_key: None,
         curves: None,
         frame_ms: Vec::new(),

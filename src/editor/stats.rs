@@ -16,9 +16,6 @@ pub enum FrameKind {
     Refinement,
     Unchanged,
     Waiting,
-    /// A settle frame whose mesh view was drawn with the filter's other choice's pipelines while its
-    /// own were built (`Recorded::StandIn`); the settle frame follows.
-    StandIn,
 }
 
 /// One frame for `--frame-stats`.
@@ -47,9 +44,8 @@ impl FrameStat {
 /// `{"device", "size": [W, H], "frames": [{"kind", "scale", "spp", "wall_ms", "gpu_ms", "frame_ms", "untimed_ms",
 /// "passes": [{"name", "ms"}]}], "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_frame_ms",
 /// "median_untimed_ms", "median_wall_over_gpu", "median_wall_over_frame"},
-/// "settle": {…}, "refinement": {…}, "waiting": {…}, "stand_in": {…}, "skipped_minimised": N, "views": …}` — `waiting`
-/// frames are those whose mesh view waited for a lobe pipeline built in the background, `stand_in` the settle frames
-/// drawn with the other choice's pipelines meanwhile (`FrameKind::StandIn`); `skipped_minimised` counts the redraws
+/// "settle": {…}, "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting`
+/// frames are those whose mesh view waited for a lobe pipeline built in the background; `skipped_minimised` counts the redraws
 /// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
 /// canvas and how (camera, exposure, light), so that a headless render can reproduce them. `gpu_ms` is the sum of
 /// the timed passes, `frame_ms` the whole frame on the GPU, `untimed_ms` the whole frame less the passes.
@@ -67,7 +63,6 @@ pub fn frame_stats_json(
         FrameKind::Refinement => "refinement",
         FrameKind::Unchanged => "unchanged",
         FrameKind::Waiting => "waiting",
-        FrameKind::StandIn => "stand_in",
     };
     let summary = |k: FrameKind| {
         let wall: Vec<f64> = frames.iter().filter(|f| f.kind == k).map(|f| f.wall_ms).collect();
@@ -103,7 +98,7 @@ pub fn frame_stats_json(
     let doc = json!({ "device": device, "size": [size.0, size.1], "frames": list,
                       "interaction": summary(FrameKind::Interaction),
                       "settle": summary(FrameKind::Settle), "refinement": summary(FrameKind::Refinement),
-                      "waiting": summary(FrameKind::Waiting), "stand_in": summary(FrameKind::StandIn),
+                      "waiting": summary(FrameKind::Waiting),
                       "skipped_minimised": skipped_minimised, "views": views });
     let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
     s.push('\n');

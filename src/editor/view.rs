@@ -44,8 +44,7 @@ pub struct Plan<'a> {
 /// What became of a frame.
 pub enum Shown {
     /// Presented; the pixels when captured (`RGBA8`, the window's size), and what became of the mesh
-    /// view ([`Recorded::Waiting`]: it shows its last image; [`Recorded::StandIn`]: drawn with the
-    /// other choice's pipelines; `Done` also when it was not asked for).
+    /// view ([`Recorded::Waiting`]: it shows its last image; `Done` also when it was not asked for).
     Presented { pixels: Option<Vec<u8>>, mesh: Recorded },
     /// The swapchain does not fit the window: nothing was drawn; ask for another frame.
     OutOfDate,

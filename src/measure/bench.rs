@@ -249,7 +249,7 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
         r.begin_frame(m)?;
         match r.record(m, s, crate::render::Progress::Fresh) {
             Ok(crate::render::Recorded::Done) => {}
-            Ok(crate::render::Recorded::Waiting | crate::render::Recorded::StandIn) => {
+            Ok(crate::render::Recorded::Waiting) => {
                 r.abandon_frame()?;
                 return Err(crate::Error::input("bench", "a lobe pipeline was still being built"));
             }

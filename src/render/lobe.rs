@@ -360,24 +360,6 @@ impl LobePass {
         Ok(())
     }
 
-    /// Whether a frame can draw `v` now (its own pipeline, or the stand-in of a variant whose output
-    /// depends on the view's size, [`LobePass::ready`]), without collecting or starting builds.
-    pub fn drawable(&self, v: &Variant) -> bool {
-        self.pipelines.contains_key(v) || (v.outputs_vary() && self.pipelines.contains_key(&v.any_output()))
-    }
-
-    /// Starts building `variants` in the background (those not built or being built) without
-    /// waiting for them: the editor's variants of a view size it will draw next.
-    pub fn build_ahead(&mut self, ctx: &Context, variants: &[Variant], notify: &Notify) -> Result<()> {
-        self.collect(ctx)?;
-        for v in variants {
-            if !self.pipelines.contains_key(v) {
-                self.spawn(ctx, *v, notify)?;
-            }
-        }
-        Ok(())
-    }
-
     /// Builds `v` on a thread of its own unless one already is.
     fn spawn(&mut self, ctx: &Context, v: Variant, notify: &Notify) -> Result<()> {
         if self.building.contains_key(&v) {

@@ -128,8 +128,7 @@ pub struct Renderer {
     /// residual without both, in frames of at least [`lobe::WIDE_TILES_MIN_SPP`] samples (with
     /// `wide_lights` and `light_tiles` set), and otherwise (fewer samples, or tiles that do not fit)
     /// the lobes that [`lobe::sees_wide_lights_as_points`] admits take the wide lights as their own
-    /// points; false
-    /// keeps the wide lights in their residual (a test compares the two).
+    /// points; false keeps the wide lights in their residual (a test compares the two).
     pub wide_tiles: bool,
     /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
     /// false leaves them unfiltered (a test compares the two).

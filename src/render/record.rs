@@ -205,121 +205,89 @@ impl Renderer {
         // once a 2 × 2 block in sparse frames.
         let sparse = self.sparse_filter && denoise::sparse(settings.spp, w, h);
         let floor = denoise::min_alpha(sparse, w, h);
-        // A lobe too narrow for the lights' own points sees them as tiles where those fit. `flip`:
-        // the variants the lobes would take if the filter's choice (which depends on the view's size)
-        // went the other way, for the editor to build ahead (below).
-        let choose = |flip: bool| -> Vec<(u32, lobe::Variant, Option<TileSet>)> {
-            material
-                .lobes
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
-                .map(|(i, l)| {
-                    let mut tile_set = None;
-                    let fits = |lights: &[crate::scene::keylight::KeyLight]| {
-                        crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
-                    };
-                    let whole = key_lights.is_some_and(|k| fits(&k.lights));
-                    // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
-                    // tiles with the test off give the same image (a test compares).
-                    let pays = lights && lobe::reach_test_pays(material, l);
-                    let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
-                    let reach_test = self.light_reach_test && pays;
-                    let wide_lights = key_lights.and_then(|k| k.wide.as_ref()).filter(|_| self.wide_lights);
-                    // A lobe that sees the wide lights as points too takes them off its residual.
-                    let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
-                    let mut tiled = false;
-                    if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
-                        let alpha = tile_alpha(l.alpha_x, l.alpha_y);
-                        // The key and wide lights together first (also for a lobe that sees the key
-                        // lights as points: those are then their own one tile), where the reach test
-                        // (if it pays) sees them all; their tiles take the wide lights off the residual.
-                        let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
-                        let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
-                        if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
-                            if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
-                                tile_set = Some(rows);
-                                (tiled, wide) = (true, true);
-                            }
-                        }
-                        // Otherwise a lobe whose samples' noise stays in the image (the filter does not
-                        // take it) and wide enough sees the wide lights as their own points.
-                        let filtered = (self.denoise && key && denoise::fits(l, false, floor)) != flip;
-                        let wide_points = |w: &&GpuWideLights| {
-                            self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, filtered)
-                        };
-                        if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
-                            if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWidePoints)
-                            {
-                                tile_set = Some(rows);
-                                (tiled, wide) = (true, true);
-                            }
-                        }
-                        if !tiled && !whole {
-                            if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
-                                tile_set = Some(rows);
-                                tiled = true;
-                            }
+        // A lobe too narrow for the lights' own points sees them as tiles where those fit.
+        let chosen: Vec<(u32, lobe::Variant, Option<TileSet>)> = material
+            .lobes
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.albedo.iter().any(|&a| a != 0.0))
+            .map(|(i, l)| {
+                let mut tile_set = None;
+                let fits = |lights: &[crate::scene::keylight::KeyLight]| {
+                    crate::scene::keylight::quadrature_fits(lights, l.alpha_x, l.alpha_y)
+                };
+                let whole = key_lights.is_some_and(|k| fits(&k.lights));
+                // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
+                // tiles with the test off give the same image (a test compares).
+                let pays = lights && lobe::reach_test_pays(material, l);
+                let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
+                let reach_test = self.light_reach_test && pays;
+                let wide_lights = key_lights.and_then(|k| k.wide.as_ref()).filter(|_| self.wide_lights);
+                // A lobe that sees the wide lights as points too takes them off its residual.
+                let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
+                let mut tiled = false;
+                if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
+                    let alpha = tile_alpha(l.alpha_x, l.alpha_y);
+                    // The key and wide lights together first (also for a lobe that sees the key
+                    // lights as points: those are then their own one tile), where the reach test
+                    // (if it pays) sees them all; their tiles take the wide lights off the residual.
+                    let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
+                    let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
+                    if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
+                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
+                            tile_set = Some(rows);
+                            (tiled, wide) = (true, true);
                         }
                     }
-                    let points = whole || tiled;
-                    let tests_reach = reach_test && (!points || tiled);
-                    // The lights of the cone table the test reads (`LobePass::record`).
-                    let light_slots = match key_lights.filter(|_| tests_reach) {
-                        Some(k) if wide => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
-                        Some(k) => k.lights.len(),
-                        None => MAX_LIGHTS,
+                    // Otherwise a lobe wide enough sees the wide lights as their own points: its key
+                    // lights' tiles within their own allowance, and four points for each wide light
+                    // (the allowance of the key and wide lights together, which counts the wide
+                    // lights' share of the pixels in reach, is smaller: it left the quick sweep's
+                    // painted streak, α 0.33 × 0.02 on studio, at 64 points for the lamp's 124).
+                    let wide_points = |w: &&GpuWideLights| {
+                        self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, settings.spp)
                     };
-                    let variant = lobe::Variant {
-                        vec4: !self.scalar_lobes,
-                        key,
-                        lights,
-                        points,
-                        wide,
-                        reach: tests_reach,
-                        light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
-                        ..lobe::Variant::of(material, l, prefilter)
-                    };
-                    (i as u32, variant, tile_set)
-                })
-                .collect()
-        };
-        // The editor also takes the variants of the filter's other choice, which a lobe's view of the
-        // wide lights follows (`lobe::sees_wide_lights_as_points`): its previews and its settle frame
-        // are drawn at different sizes, and a settle frame must not wait for a pipeline. It builds
-        // them ahead (below), and a frame whose own choice is not built yet but whose other one is
-        // draws with that one (the same material under the same lights, the softbox split off
-        // differently): [`Recorded::StandIn`], not yet what a headless render draws.
-        let mut chosen = choose(false);
-        let mut other = match &self.build_in_background {
-            Some(_) if mesh_view && settings.estimator != Estimator::Mis => choose(true),
-            _ => Vec::new(),
-        };
-        let mut stand_in = false;
-        if !other.is_empty() {
-            // What has been built since the last frame first (its callback may be what woke this one).
-            let pass = &mut self.passes.as_mut().expect("passes live until drop").lobe;
-            pass.collect(&self.ctx)?;
-            let drawable = |set: &[(u32, lobe::Variant, Option<TileSet>)]| set.iter().all(|(_, v, _)| pass.drawable(v));
-            if !drawable(&chosen) && drawable(&other) {
-                std::mem::swap(&mut chosen, &mut other);
-                stand_in = true;
-            }
-        }
+                    if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
+                        let budget = max_points(&k.lights, reach) + 4 * w.lights.len();
+                        if let Some(rows) = k.tiles(alpha, budget, TileLights::KeyAndWidePoints) {
+                            tile_set = Some(rows);
+                            (tiled, wide) = (true, true);
+                        }
+                    }
+                    if !tiled && !whole {
+                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
+                            tile_set = Some(rows);
+                            tiled = true;
+                        }
+                    }
+                }
+                let points = whole || tiled;
+                let tests_reach = reach_test && (!points || tiled);
+                // The lights of the cone table the test reads (`LobePass::record`).
+                let light_slots = match key_lights.filter(|_| tests_reach) {
+                    Some(k) if wide => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
+                    Some(k) => k.lights.len(),
+                    None => MAX_LIGHTS,
+                };
+                let variant = lobe::Variant {
+                    vec4: !self.scalar_lobes,
+                    key,
+                    lights,
+                    points,
+                    wide,
+                    reach: tests_reach,
+                    light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
+                    ..lobe::Variant::of(material, l, prefilter)
+                };
+                (i as u32, variant, tile_set)
+            })
+            .collect();
         let mut tiles: Vec<(u32, TileSet)> = Vec::new();
         let mut lobes: Vec<(u32, lobe::Variant)> = Vec::new();
         for (i, v, t) in chosen {
             tiles.extend(t.map(|t| (i, t)));
             lobes.push((i, v));
         }
-        // The other choice's pipelines as `LobePass::ready` would ask for them: the stand-in of every
-        // output (`Output::Any`) of a variant whose output varies, a variant's own otherwise. (After
-        // a swap, the frame's own: a view drawn with stand-ins is drawn again once they are built.)
-        let ahead: Vec<lobe::Variant> = other
-            .into_iter()
-            .map(|(_, v, _)| if v.outputs_vary() { v.any_output() } else { v })
-            .filter(|v| lobes.iter().all(|(_, w)| w != v && w.any_output() != *v))
-            .collect();
         // Where each lobe pass writes, which its pipeline is built for (`lobe::Output`).
         let intos: Vec<lobe::Into> = lobes
             .iter()
@@ -362,8 +330,6 @@ impl Renderer {
                             }
                             return Ok(Recorded::Waiting);
                         }
-                        // After the frame's own, so that those build first.
-                        lobe.build_ahead(&self.ctx, &ahead, notify)?;
                     }
                     None => lobe.prepare(&self.ctx, &variants)?,
                 }
@@ -576,6 +542,6 @@ impl Renderer {
         // A `mis` frame leaves `base` as it was.
         targets.base_of = if raster { None } else { base_key.or(base_of) };
         targets.drawn = true;
-        Ok(if stand_in { Recorded::StandIn } else { Recorded::Done })
+        Ok(Recorded::Done)
     }
 }

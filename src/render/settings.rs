@@ -139,11 +139,6 @@ pub enum Recorded {
     /// Nothing: a lobe pipeline the view needs is being built in the background; the view keeps its
     /// last image.
     Waiting,
-    /// The view's passes with the lobe pipelines of the filter's other choice (built ahead for
-    /// another size of the view) while its own are built in the background: the same material
-    /// under the same lights, the wide lights split off differently, so not yet the image a
-    /// headless render draws. The build calls back when the view can be drawn with its own.
-    StandIn,
 }
 
 /// How a mesh view frame relates to the ones before it.

@@ -36,14 +36,21 @@ pub const WIDE_POINTS_RATIO: f64 = 2.0;
 /// Whether a lobe that does not see the key and wide lights as tiles together (frames of fewer than
 /// [`WIDE_TILES_MIN_SPP`] samples, or more tiles than it may take) sees the wide lights as their own
 /// four points each (`TileLights::KeyAndWidePoints`: its key lights as tiles or points, over the map
-/// without both): a lobe the filter does not take (`filtered` false: its samples' noise stays in
-/// the image) and wider than the wide lights by [`WIDE_POINTS_RATIO`]. The points are biased where
-/// the lobe is narrower than the light along an axis (a lobe narrow along one axis only, like the
-/// sweep's Ward 0.05 × 0.3, sees them as four short streaks there: measured, its 8-spp error still
-/// fell from 0.081 to 0.048); the BRDF samples they replace are noisy there.
-pub fn sees_wide_lights_as_points(lobe: &Lobe, wide: &[KeyLight], filtered: bool) -> bool {
-    let alpha = lobe.alpha_x.max(lobe.alpha_y);
-    !filtered && !wide.is_empty() && wide.iter().all(|l| l.spread <= WIDE_POINTS_RATIO * alpha)
+/// without both): one wider than the wide lights by [`WIDE_POINTS_RATIO`], by its larger roughness in
+/// frames of fewer than [`WIDE_TILES_MIN_SPP`] samples and by its smaller one from there on.
+///
+/// The points are biased where the lobe is narrower than the light along an axis (the sweep's Ward
+/// 0.05 × 0.3 sees them as four short streaks there): at a few samples the BRDF samples they replace
+/// are noisier than that bias, at many they are not. Measured on the quick sweep (32², studio,
+/// 2-core lavapipe, `report error-vs-time --quick`), `painted-aniso`, whose streak (α 0.33 × 0.02)
+/// takes the points at 1–8 samples only: 8 spp 0.111 → 0.071 with its rough lobe's points below,
+/// where the streak taking them at 128 spp too made that frame 0.019 → 0.032. The filtered lobes
+/// take them too: the filter takes the samples' noise but not the bias of its blur, which grows with
+/// what the residual keeps (`painted-tilted`'s α 0.27 lobe, 8 spp: 0.153 → 0.089; `painted-aniso`'s
+/// α 0.36 lobe 0.092 → 0.054).
+pub fn sees_wide_lights_as_points(lobe: &Lobe, wide: &[KeyLight], spp: u32) -> bool {
+    let alpha = if spp < WIDE_TILES_MIN_SPP { lobe.alpha_x.max(lobe.alpha_y) } else { lobe.alpha_x.min(lobe.alpha_y) };
+    !wide.is_empty() && wide.iter().all(|l| l.spread <= WIDE_POINTS_RATIO * alpha)
 }
 
 /// The widest reach ([`reach_angle`]) at which the per-pixel test pays. Measured at 512², studio,
@@ -205,5 +212,37 @@ mod tests {
             }
         }
         assert!(past > 10_000 && between, "{past} pairs past the reach; one within Ward's angles: {between}");
+    }
+
+    /// The wide lights' points by the lobe's larger roughness below [`WIDE_TILES_MIN_SPP`] samples
+    /// and by its smaller one from there on, at [`WIDE_POINTS_RATIO`] exactly; none without wide
+    /// lights. Studio's softbox spread (9.37°, 0.164 rad) and the painted streak (α 0.33 × 0.02).
+    #[test]
+    fn wide_points_follow_the_larger_roughness_below_wide_tiles_min_spp_and_the_smaller_from_there() {
+        let light = |spread: f64| KeyLight {
+            direction: DVec3::Z,
+            angular_radius: spread,
+            solid_angle: 0.1,
+            power: [1.0; 3],
+            texels: 1,
+            extent: spread,
+            points: [DVec3::Z; 4],
+            spread,
+            region: Vec::new(),
+        };
+        let softbox = [light(0.164)];
+        let lobe = |ax: f64, ay: f64| Lobe { alpha_y: ay, ..Lobe::isotropic([1.0; 3], ax) };
+        let streak = lobe(0.33, 0.02);
+        let below = WIDE_TILES_MIN_SPP - 1;
+        assert!(sees_wide_lights_as_points(&streak, &softbox, 1));
+        assert!(sees_wide_lights_as_points(&streak, &softbox, below));
+        assert!(!sees_wide_lights_as_points(&streak, &softbox, WIDE_TILES_MIN_SPP));
+        assert!(!sees_wide_lights_as_points(&lobe(0.02, 0.33), &softbox, 128));
+        assert!(sees_wide_lights_as_points(&lobe(0.1, 0.1), &softbox, WIDE_TILES_MIN_SPP));
+        // At the ratio: spread = 2 α passes, a hair above fails.
+        let edge = 0.164 / WIDE_POINTS_RATIO;
+        assert!(sees_wide_lights_as_points(&lobe(edge, edge), &softbox, 8));
+        assert!(!sees_wide_lights_as_points(&lobe(edge * 0.999, edge * 0.999), &softbox, 8));
+        assert!(!sees_wide_lights_as_points(&lobe(1.0, 1.0), &[], 8));
     }
 }
