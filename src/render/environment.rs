@@ -214,9 +214,9 @@ impl KeyLightSummary {
     }
 
     /// The smallest `max(αx, αy)` of a lobe that sees each wide light as its four points where it
-    /// does not see them as tiles, in frames of fewer than `lobe::WIDE_TILES_MIN_SPP` samples (from
-    /// there on, the smallest `min(αx, αy)`: `lobe::sees_wide_lights_as_points`); `None` without
-    /// wide lights.
+    /// does not see them as tiles, in frames of fewer than `lobe::WIDE_POINTS_BY_SMALLER_ALPHA_SPP`
+    /// samples (from there on, the smallest `min(αx, αy)`: `lobe::sees_wide_lights_as_points`);
+    /// `None` without wide lights.
     pub fn wide_points_min_alpha(&self) -> Option<f64> {
         let spread = self.wide.iter().map(|l| l.spread).fold(0.0, f64::max);
         (!self.wide.is_empty()).then(|| spread / super::lobe::WIDE_POINTS_RATIO)
@@ -275,11 +275,12 @@ impl KeyLightSummary {
         if let Some(alpha) = self.wide_min_alpha() {
             let each: Vec<String> = self.wide.iter().map(describe_light).collect();
             line += &format!(
-                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe sees the key and wide lights as tiles together where those fit (and its reach test, if it takes one, can hold them all), over the map without both; otherwise a lobe with max(αx, αy) ≥ {points:.4} (in frames of fewer samples; min(αx, αy) ≥ {points:.4} from there on) sees each wide light as its 4 quadrature points (and the key lights as points or tiles), over the map without both",
+                "; {} wide light(s) carrying {:.1} % (above {WIDE_THRESHOLD_OVER_MEAN} × the mean once the key lights are removed): {}; lobes with min(αx, αy) ≥ {alpha:.4} see key and wide lights as points over the map without both, and, in frames of {} samples or more, a narrower lobe sees the key and wide lights as tiles together where those fit (and its reach test, if it takes one, can hold them all), over the map without both; otherwise a lobe with max(αx, αy) ≥ {points:.4} (min(αx, αy) in frames of {} samples or more) sees each wide light as its 4 quadrature points (and the key lights as points or tiles), over the map without both",
                 self.wide.len(),
                 self.wide_share * 100.0,
                 each.join("; "),
                 super::lobe::WIDE_TILES_MIN_SPP,
+                super::lobe::WIDE_POINTS_BY_SMALLER_ALPHA_SPP,
                 points = self.wide_points_min_alpha().unwrap_or(0.0)
             );
         }

@@ -242,8 +242,9 @@ impl Renderer {
                     // Otherwise a lobe wide enough sees the wide lights as their own points: its key
                     // lights' tiles within their own allowance, and four points for each wide light
                     // (the allowance of the key and wide lights together, which counts the wide
-                    // lights' share of the pixels in reach, is smaller: it left the quick sweep's
-                    // painted streak, α 0.33 × 0.02 on studio, at 64 points for the lamp's 124).
+                    // lights' share of the pixels in reach, is smaller: it would hold the quick
+                    // sweep's painted streak, α 0.33 × 0.02 on studio, to 64 points, where the lamp
+                    // alone takes 124).
                     let wide_points = |w: &&GpuWideLights| {
                         self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, settings.spp)
                     };

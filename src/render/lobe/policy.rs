@@ -33,23 +33,34 @@ pub const WIDE_TILES_MIN_SPP: u32 = 16;
 /// 0.024 / 0.016 → 0.119 / 0.116.
 pub const WIDE_POINTS_RATIO: f64 = 2.0;
 
+/// From this many samples on, a lobe sees the wide lights as their own points
+/// ([`sees_wide_lights_as_points`]) only where its smaller roughness is wide enough; below it, its
+/// larger one. The points are biased where the lobe is narrower than the light along an axis (the
+/// sweep's Ward 0.05 × 0.3 sees them as four short streaks there): at a few samples the BRDF
+/// samples they replace are noisier than that bias, at many they are not. Measured on the 64²
+/// sweep (2-core lavapipe, `report error-vs-time`), studio's Ward 0.05 × 0.3 lobe with the softbox
+/// as points / in its residual: 16 spp 0.035 / 0.056, 32 spp 0.027 / 0.035, 64 spp 0.0215 / 0.0218,
+/// 128 spp 0.019 / 0.0145, 256 spp 0.018 / 0.011; on the quick sweep (32²) `painted-aniso`'s
+/// streak (α 0.33 × 0.02): 8 spp 0.071 / 0.111 (the whole scene), 32 spp 0.039 / 0.035,
+/// 128 spp 0.032 / 0.019.
+pub const WIDE_POINTS_BY_SMALLER_ALPHA_SPP: u32 = 64;
+
 /// Whether a lobe that does not see the key and wide lights as tiles together (frames of fewer than
 /// [`WIDE_TILES_MIN_SPP`] samples, or more tiles than it may take) sees the wide lights as their own
 /// four points each (`TileLights::KeyAndWidePoints`: its key lights as tiles or points, over the map
-/// without both): one wider than the wide lights by [`WIDE_POINTS_RATIO`], by its larger roughness in
-/// frames of fewer than [`WIDE_TILES_MIN_SPP`] samples and by its smaller one from there on.
-///
-/// The points are biased where the lobe is narrower than the light along an axis (the sweep's Ward
-/// 0.05 × 0.3 sees them as four short streaks there): at a few samples the BRDF samples they replace
-/// are noisier than that bias, at many they are not. Measured on the quick sweep (32², studio,
-/// 2-core lavapipe, `report error-vs-time --quick`), `painted-aniso`, whose streak (α 0.33 × 0.02)
-/// takes the points at 1–8 samples only: 8 spp 0.111 → 0.071 with its rough lobe's points below,
-/// where the streak taking them at 128 spp too made that frame 0.019 → 0.032. The filtered lobes
-/// take them too: the filter takes the samples' noise but not the bias of its blur, which grows with
-/// what the residual keeps (`painted-tilted`'s α 0.27 lobe, 8 spp: 0.153 → 0.089; `painted-aniso`'s
-/// α 0.36 lobe 0.092 → 0.054).
+/// without both): one wider than the wide lights by [`WIDE_POINTS_RATIO`], by its larger roughness
+/// in frames of fewer than [`WIDE_POINTS_BY_SMALLER_ALPHA_SPP`] samples and by its smaller one from
+/// there on. Whether the rough lobes' filter takes the lobe does not matter: the filter takes the
+/// samples' noise but not the bias of its blur, which grows with what the residual keeps (quick
+/// sweep, 8 spp, the softbox in the residual / as points: `painted-tilted`'s α 0.27 lobe, a scene of
+/// its own, 0.153 / 0.089; `painted-aniso`'s α 0.36 lobe 0.092 / 0.054). Their cost on the bench's
+/// goal scene (512², 8 spp, lavapipe): about 1 ms a lobe pass that takes them (three of its four).
 pub fn sees_wide_lights_as_points(lobe: &Lobe, wide: &[KeyLight], spp: u32) -> bool {
-    let alpha = if spp < WIDE_TILES_MIN_SPP { lobe.alpha_x.max(lobe.alpha_y) } else { lobe.alpha_x.min(lobe.alpha_y) };
+    let alpha = if spp < WIDE_POINTS_BY_SMALLER_ALPHA_SPP {
+        lobe.alpha_x.max(lobe.alpha_y)
+    } else {
+        lobe.alpha_x.min(lobe.alpha_y)
+    };
     !wide.is_empty() && wide.iter().all(|l| l.spread <= WIDE_POINTS_RATIO * alpha)
 }
 
@@ -214,11 +225,11 @@ mod tests {
         assert!(past > 10_000 && between, "{past} pairs past the reach; one within Ward's angles: {between}");
     }
 
-    /// The wide lights' points by the lobe's larger roughness below [`WIDE_TILES_MIN_SPP`] samples
+    /// The wide lights' points by the lobe's larger roughness below [`WIDE_POINTS_BY_SMALLER_ALPHA_SPP`] samples
     /// and by its smaller one from there on, at [`WIDE_POINTS_RATIO`] exactly; none without wide
     /// lights. Studio's softbox spread (9.37°, 0.164 rad) and the painted streak (α 0.33 × 0.02).
     #[test]
-    fn wide_points_follow_the_larger_roughness_below_wide_tiles_min_spp_and_the_smaller_from_there() {
+    fn wide_points_follow_the_larger_roughness_at_few_samples_and_the_smaller_at_many() {
         let light = |spread: f64| KeyLight {
             direction: DVec3::Z,
             angular_radius: spread,
@@ -233,12 +244,12 @@ mod tests {
         let softbox = [light(0.164)];
         let lobe = |ax: f64, ay: f64| Lobe { alpha_y: ay, ..Lobe::isotropic([1.0; 3], ax) };
         let streak = lobe(0.33, 0.02);
-        let below = WIDE_TILES_MIN_SPP - 1;
+        let many = WIDE_POINTS_BY_SMALLER_ALPHA_SPP;
         assert!(sees_wide_lights_as_points(&streak, &softbox, 1));
-        assert!(sees_wide_lights_as_points(&streak, &softbox, below));
-        assert!(!sees_wide_lights_as_points(&streak, &softbox, WIDE_TILES_MIN_SPP));
-        assert!(!sees_wide_lights_as_points(&lobe(0.02, 0.33), &softbox, 128));
-        assert!(sees_wide_lights_as_points(&lobe(0.1, 0.1), &softbox, WIDE_TILES_MIN_SPP));
+        assert!(sees_wide_lights_as_points(&streak, &softbox, many - 1));
+        assert!(!sees_wide_lights_as_points(&streak, &softbox, many));
+        assert!(!sees_wide_lights_as_points(&lobe(0.02, 0.33), &softbox, 256));
+        assert!(sees_wide_lights_as_points(&lobe(0.1, 0.1), &softbox, many));
         // At the ratio: spread = 2 α passes, a hair above fails.
         let edge = 0.164 / WIDE_POINTS_RATIO;
         assert!(sees_wide_lights_as_points(&lobe(edge, edge), &softbox, 8));
