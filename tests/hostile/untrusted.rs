@@ -219,13 +219,17 @@ fn gltf_long_uri_is_quoted_short() {
 // Outputs: planted temporary names, permissions, devices and FIFOs, one file named twice, long
 // names, success lines.
 
-/// The next process ids the kernel hands out (it counts up from the last one), for planting files at
-/// the temporary names a writer that names them by its process id would use.
+/// The next process ids the kernel hands out (it counts up from the last one: the id of a child
+/// started here), for planting files at the temporary names a writer that names them by its process
+/// id would use.
 fn next_pids(n: u32) -> std::ops::Range<u32> {
-    let last: u32 = std::fs::read_to_string("/proc/sys/kernel/ns_last_pid")
-        .ok()
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap_or_else(std::process::id);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .arg("--version")
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("start brdf-shop --version");
+    let last = child.id();
+    child.wait().expect("brdf-shop --version");
     last + 1..last + 1 + n
 }
 
@@ -298,10 +302,13 @@ fn outputs_that_are_not_regular_files_are_refused() {
     let strokes = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.strokes.json");
     let fifo = d.join("pipe.out");
     mkfifo(&fifo);
-    // A character device through a symlink (what `--out /dev/null` is): the device must stay.
-    let null = d.join("null.out");
-    std::os::unix::fs::symlink("/dev/null", &null).unwrap();
-    for target in [&fifo, &null] {
+    // A socket through a symlink (as `--out /dev/null` is a device through one): the link and the
+    // socket must stay.
+    let socket = d.join("sock");
+    let _listener = std::os::unix::net::UnixListener::bind(&socket).expect("a socket in the test's folder");
+    let linked = d.join("linked.out");
+    std::os::unix::fs::symlink(&socket, &linked).unwrap();
+    for target in [&fifo, &linked] {
         let t = s(target);
         let r = cpu(&["export", "--material", s(&m), "--format", "glsl", "--out", t]);
         refused(&r, 1, &["--out", "regular file"]);
@@ -314,8 +321,9 @@ fn outputs_that_are_not_regular_files_are_refused() {
         refused(&r, 1, &["--frame-stats", "regular file"]);
     }
     assert!(is_fifo(&fifo));
-    assert!(std::fs::symlink_metadata(&null).unwrap().file_type().is_symlink());
-    assert_eq!(listing(d), ["m.brdf.json", "null.out", "pipe.out"]);
+    assert!(std::fs::symlink_metadata(&linked).unwrap().file_type().is_symlink());
+    assert!(std::fs::symlink_metadata(&socket).unwrap().file_type().is_socket());
+    assert_eq!(listing(d), ["linked.out", "m.brdf.json", "pipe.out", "sock"]);
 }
 
 #[test]
