@@ -248,15 +248,16 @@ impl Renderer {
                     let wide_points = |w: &&GpuWideLights| {
                         self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, settings.spp)
                     };
+                    let key_points = max_points(&k.lights, reach);
                     if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
-                        let budget = max_points(&k.lights, reach) + 4 * w.lights.len();
+                        let budget = key_points + 4 * w.lights.len();
                         if let Some(rows) = k.tiles(alpha, budget, TileLights::KeyAndWidePoints) {
                             tile_set = Some(rows);
                             (tiled, wide) = (true, true);
                         }
                     }
                     if !tiled && !whole {
-                        if let Some(rows) = k.tiles(alpha, max_points(&k.lights, reach), TileLights::Key) {
+                        if let Some(rows) = k.tiles(alpha, key_points, TileLights::Key) {
                             tile_set = Some(rows);
                             tiled = true;
                         }
