@@ -138,7 +138,7 @@ fn real_maps_split_into_lights_and_residual_without_losing_energy() {
             assert!(wide.share >= MIN_SHARE, "{name}: {}", wide.share);
             println!("{name:16} wide lights {} share {:.3}", wide.lights.len(), wide.share);
         }
-        // Studio's softbox (10–30 × the mean over 0.08 sr) is its one wide light; sky's sun has none.
+        // Studio's softbox (7–30 × the mean over 0.16 sr) is its one wide light; sky's sun has none.
         let wide_count = found.wide.as_ref().map_or(0, |w| w.lights.len());
         if name == "studio.exr" || name == "sky.exr" {
             assert_eq!(wide_count, usize::from(name == "studio.exr"), "{name}");
