@@ -133,6 +133,38 @@ fn control_rows_within_five_percent_are_stable() {
     assert!(!stability(&[1.0, 0.0]).stable && !stability(&[1.0, f64::NAN]).stable);
 }
 
+/// The run's verdict counts the goal row of the control rows' configuration beside them: three
+/// control rows that agree around a goal row 20 % faster (a run measured on lavapipe: 77.3, 78.0,
+/// 75.3 ms around 62.6) make an unstable run; a goal row of another size does not count.
+#[test]
+fn the_goal_row_at_the_control_size_counts_in_the_verdict() {
+    use brdf_shop::measure::bench::{stability, Measurement};
+    let row = |group: &'static str, label: &str, ms: f64| Measurement {
+        group,
+        label: label.to_string(),
+        triangles: 1,
+        passes: Vec::new(),
+        total: (ms, ms, ms),
+        frame: (ms, ms, ms),
+        untimed: (0.0, 0.0, 0.0),
+        pixel_samples: 1,
+    };
+    let run = |goal: f64, size: &str| {
+        vec![
+            row("control", "512x512 key, start", 77.331),
+            row("goal", size, goal),
+            row("goal", "1920x1080 key", 258.8),
+            row("control", "512x512 key, middle", 77.971),
+            row("control", "512x512 key, end", 75.323),
+        ]
+    };
+    let agreeing = stability(&run(76.0, "512x512 key"));
+    assert!(agreeing.stable && (agreeing.spread - (77.971 / 75.323 - 1.0)).abs() < 1e-12, "{agreeing:?}");
+    let off = stability(&run(62.574, "512x512 key"));
+    assert!(!off.stable && (off.spread - (77.971 / 62.574 - 1.0)).abs() < 1e-12, "{off:?}");
+    assert!(stability(&run(62.574, "96x96 key")).stable, "a goal row of another size does not count");
+}
+
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
 /// below a third of the error at one sample per pixel — QMC on these scenes falls faster than
 /// 1/√N, which would give 1/√128 ≈ 0.09), and `key` improves to within 2 % relative L1; on the sun
@@ -280,7 +312,9 @@ fn commands_run_through_the_binary() {
     assert!(v["configurations"].as_array().unwrap().len() > 5);
     // The run's verdict, the device, its driver, and the clocks (none on lavapipe: not NVIDIA's).
     assert!(v["stable"].is_boolean() && v["control_frame_ms"].as_array().unwrap().len() == 3, "{v}");
-    assert!(text.contains("control rows"), "{text}");
+    // The goal row at the control size (96², the first goal size) counts in the verdict too.
+    assert!(v["control_goal_frame_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{v}");
+    assert!(text.contains("control rows") && text.contains("and the goal row"), "{text}");
     assert!(!v["device"].as_str().unwrap().is_empty());
     let driver = &v["driver"];
     assert!(!driver["name"].as_str().unwrap().is_empty() && driver["info"].is_string(), "{driver}");

@@ -40,7 +40,7 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
     let stability = bench::stability(&rows);
     if !stability.stable {
         eprintln!(
-            "warning: unstable run: the control rows' whole-frame medians are {:.1} % apart (more than {:.0} %)",
+            "warning: unstable run: the whole-frame medians of the control rows and the goal row at their size are {:.1} % apart (more than {:.0} %)",
             100.0 * stability.spread,
             100.0 * brdf_shop::measure::control::CONTROL_TOLERANCE
         );

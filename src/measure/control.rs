@@ -1,6 +1,6 @@
 //! The bench's trust checks: the control rows' stability rule (the same configuration measured at the
-//! start, middle and end of a run must agree) and the device clocks read beside a run. Pure
-//! arithmetic and a read-only query; nothing here changes a device setting.
+//! start, middle and end of a run, and as its goal row, must agree) and the device clocks read beside
+//! a run. Pure arithmetic and a read-only query; nothing here changes a device setting.
 
 /// How far apart the control rows' medians may be before a run is unstable: 5 % of the smallest.
 /// Unlocked GPU clocks move more than that when a device drops a clock step between rows, and
