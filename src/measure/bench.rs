@@ -400,12 +400,14 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     Ok(out)
 }
 
-/// The goal row of the control rows' configuration (the goal scene at the control size): its label
-/// is theirs without the `, start` / `, middle` / `, end` suffix.
-fn goal_at_control_size(rows: &[Measurement]) -> Option<&Measurement> {
-    let control = rows.iter().find(|r| r.group == "control")?;
-    let label = control.label.split(", ").next()?;
-    rows.iter().find(|r| r.group == "goal" && r.label == label)
+/// The whole-frame medians of the control rows (start, middle, end) and of the goal row of their
+/// configuration (the goal scene at the control size: its label is theirs without the `, start` /
+/// `, middle` / `, end` suffix), where there is one.
+fn control_frames(rows: &[Measurement]) -> (Vec<f64>, Option<f64>) {
+    let controls: Vec<&Measurement> = rows.iter().filter(|r| r.group == "control").collect();
+    let label = controls.first().and_then(|c| c.label.split(", ").next());
+    let goal = rows.iter().find(|r| r.group == "goal" && Some(r.label.as_str()) == label).map(|g| g.frame.0);
+    (controls.iter().map(|r| r.frame.0).collect(), goal)
 }
 
 /// The run's stability (`control::stability`) over the whole-frame medians of the control rows and
@@ -414,8 +416,8 @@ fn goal_at_control_size(rows: &[Measurement]) -> Option<&Measurement> {
 /// run's three control rows measured 77.3, 78.0 and 75.3 ms (3.5 % apart) around a goal row of
 /// 62.6 ms, the same configuration (`bench`, llvmpipe, its arithmetic peak at 72 GFLOP/s).
 pub fn stability(rows: &[Measurement]) -> super::control::Stability {
-    let mut medians: Vec<f64> = rows.iter().filter(|r| r.group == "control").map(|r| r.frame.0).collect();
-    medians.extend(goal_at_control_size(rows).map(|g| g.frame.0));
+    let (mut medians, goal) = control_frames(rows);
+    medians.extend(goal);
     super::control::stability(&medians)
 }
 
@@ -494,9 +496,9 @@ pub fn table(rows: &[Measurement], device: &str, peak_gflops: f64) -> String {
         ));
     }
     let st = stability(rows);
-    let medians: Vec<String> =
-        rows.iter().filter(|r| r.group == "control").map(|r| format!("{:.3}", r.frame.0)).collect();
-    let goal = goal_at_control_size(rows).map_or(String::new(), |g| format!(" and the goal row {:.3}", g.frame.0));
+    let (controls, goal) = control_frames(rows);
+    let medians: Vec<String> = controls.iter().map(|ms| format!("{ms:.3}")).collect();
+    let goal = goal.map_or(String::new(), |ms| format!(" and the goal row {ms:.3}"));
     s.push_str(&format!(
         "control rows (whole frame, ms): {}{goal} -- {:.1} % apart: {}\n",
         medians.join(", "),
@@ -526,6 +528,7 @@ pub fn driver_json(info: &crate::vk::device::DeviceInfo) -> serde_json::Value {
 
 pub fn json(rows: &[Measurement], device: &str, plan: &Plan, peak_gflops: f64) -> serde_json::Value {
     let st = stability(rows);
+    let (controls, control_goal) = control_frames(rows);
     serde_json::json!({
         "device": device,
         "repeats": plan.repeats,
@@ -537,8 +540,8 @@ pub fn json(rows: &[Measurement], device: &str, plan: &Plan, peak_gflops: f64) -
         "stable": st.stable,
         "control_spread": if st.spread.is_finite() { serde_json::json!(st.spread) } else { serde_json::Value::Null },
         "control_tolerance": super::control::CONTROL_TOLERANCE,
-        "control_frame_ms": rows.iter().filter(|r| r.group == "control").map(|r| r.frame.0).collect::<Vec<_>>(),
-        "control_goal_frame_ms": goal_at_control_size(rows).map(|g| g.frame.0),
+        "control_frame_ms": controls,
+        "control_goal_frame_ms": control_goal,
         "configurations": rows.iter().map(|r| serde_json::json!({
             "group": r.group,
             "label": r.label,
