@@ -210,15 +210,20 @@ PointView point_view(Frame f, vec3 b, vec4 shape, float wo_z) {
     v.wo_z = wo_z;
     return v;
 }
-// The facet frame whose axes are qa x̂, qa ŷ, qa ẑ (local): qa = Q for h's components in Q⁻¹ h, Q⁻¹ for
-// a split lobe's other face.
+// The frame (world) whose axes are qa x̂, qa ŷ, qa ẑ of the surface frame f: to_local there is qa⁻¹
+// of f's.
+Frame facet_frame(Frame f, vec4 qa) {
+    return Frame(to_world(f, quat_rotate(qa, vec3(1.0, 0.0, 0.0))), to_world(f, quat_rotate(qa, vec3(0.0, 1.0, 0.0))),
+                 to_world(f, quat_rotate(qa, vec3(0.0, 0.0, 1.0))));
+}
+// The view of `facet_frame(f, qa)`: qa = Q for h's components in Q⁻¹ h, Q⁻¹ for a split lobe's
+// other face.
 PointView facet_view(Frame f, vec4 qa, vec3 wo, vec4 shape) {
     PointView v;
-    vec3 x = to_world(f, quat_rotate(qa, vec3(1.0, 0.0, 0.0)));
-    vec3 y = to_world(f, quat_rotate(qa, vec3(0.0, 1.0, 0.0)));
-    v.az = to_world(f, quat_rotate(qa, vec3(0.0, 0.0, 1.0)));
-    v.ax = (x * shape.z + y * shape.w) / shape.x;
-    v.ay = (y * shape.z - x * shape.w) / shape.y;
+    Frame g = facet_frame(f, qa);
+    v.az = g.n;
+    v.ax = (g.t * shape.z + g.b * shape.w) / shape.x;
+    v.ay = (g.b * shape.z - g.t * shape.w) / shape.y;
     v.bw = to_world(f, wo);
     v.bz = 0.0;
     v.scale = wo.z > 0.0 ? 1.0 / (2.0 * PI * shape.x * shape.y) : 0.0;
@@ -241,7 +246,7 @@ float point_fcos(vec3 a, float wz, PointView v) {
     if (FACET) {
         float r = 1.0 / (hz * hz);
         float e = q * r;
-        float F = min(exp(-e) * len2 * r / (hz * max(wz, v.wo_z)), 1.6516363e38);
+        float F = min(exp(-e) * len2 * r / (hz * max(wz, v.wo_z)), exp(LN_MAX));
         return hz > 0.0 && e >= 0.0 && e < 80.0 ? v.scale * F * wz : 0.0;
     }
     if (GM) {
@@ -620,9 +625,7 @@ uint near_lights(Frame f, vec4 shape, vec3 b) {
 // surface frame's), whose mirror direction is ω_o's mirror about the facet normal m = Q ẑ.
 uint lobe_near_lights(Frame f, vec4 shape, vec4 q, vec3 wo) {
     if (FACET && ROTATED) {
-        Frame g = Frame(to_world(f, quat_rotate(q, vec3(1.0, 0.0, 0.0))), to_world(f, quat_rotate(q, vec3(0.0, 1.0, 0.0))),
-                        to_world(f, quat_rotate(q, vec3(0.0, 0.0, 1.0))));
-        return near_lights(g, shape, quat_rotate(quat_conjugate(q), wo));
+        return near_lights(facet_frame(f, q), shape, quat_rotate(quat_conjugate(q), wo));
     }
     return near_lights(f, shape, ROTATED ? quat_rotate(q, wo) : wo);
 }
