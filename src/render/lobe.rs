@@ -222,8 +222,8 @@ pub struct LightSet<'a> {
     pub counts: [f32; 2],
     /// For tiles (`keylight::tiles::TileSet`), where each light's rows end, the slots past the
     /// lights' ending where the last does: a `points` variant with the reach test runs each light's
-    /// points only at the pixels within its reach (`lobe.comp` `near_points`, `block_points`). `None` for the
-    /// other sets.
+    /// points only at the pixels within its reach (`glsl/include/lobe_lights.glsl` `near_points`,
+    /// `block_points`). `None` for the other sets.
     pub ends: Option<[u32; MAX_LIGHTS]>,
 }
 
