@@ -109,7 +109,8 @@ pub struct GpuKeyLights {
     /// `Â_l · L_lm` of the residual, 9 × `vec4`.
     pub sh: Buffer,
     /// `uvec4(lights, 0, 0, 0)`, then per light `vec4(direction, cos extent)` and
-    /// `vec4(power rgb, extent)` (the extent in radians: `lobe.comp`'s reach test).
+    /// `vec4(power rgb, extent)` (the extent in radians: the reach test of
+    /// `glsl/include/lobe_lights.glsl`).
     pub cones: Buffer,
     /// Per texel of the map: the lights' radiance (rgb, read nearest) and the pdf over `(u, v)` of
     /// [`keylight::LightSampling`] (alpha): one fetch gives a BRDF sample both.

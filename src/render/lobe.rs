@@ -63,9 +63,9 @@ pub struct Variant {
     /// BRDF samples read the map without both.
     pub wide: bool,
     /// With `lights`, a lobe of one component narrow enough that most pixels' lobes cannot reach a
-    /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe.comp` `sees_lights`),
-    /// and with tiles each pixel runs only the points of the lights within its reach
-    /// (`near_lights`); with `wide`, the test reads the key and wide lights' cones
+    /// light ([`reach_test_pays`]): those pixels skip the light term (`lobe_lights.glsl`
+    /// `lobe_sees_lights`), and with tiles each pixel runs only the points of the lights within its
+    /// reach (`near_lights`); with `wide`, the test reads the key and wide lights' cones
     /// (`GpuWideLights::cones`).
     pub reach: bool,
     /// Where the pass writes ([`Into::output`]): a constant of the pipeline, not a push constant,
