@@ -379,3 +379,57 @@ fn a_missing_map_is_refused_by_its_path() {
         assert!(!report.exists() && !json.exists(), "{args:?}: something was written");
     }
 }
+
+/// `bench --goal`: the goal scene at the control size between a start and an end control row, no
+/// other row and no viewer rows, with the run's verdict over the three.
+#[test]
+fn bench_goal_runs_the_goal_row_between_two_control_rows() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let json = dir.path().join("goal.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(["bench", "--goal", "--quick", "--json", json.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("BRDF_SHOP_HDRI")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("goal scene 96x96 key") && !text.contains("viewer frames"), "{text}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows: Vec<(&str, &str)> = v["configurations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c["group"].as_str().unwrap(), c["label"].as_str().unwrap()))
+        .collect();
+    assert_eq!(rows, [("control", "96x96 key, start"), ("goal", "96x96 key"), ("control", "96x96 key, end")], "{v}");
+    assert!(v["stable"].is_boolean() && v["control_frame_ms"].as_array().unwrap().len() == 2, "{v}");
+    assert!(v["control_goal_frame_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{v}");
+    assert_eq!(v["viewer"].as_array().map(Vec::len), Some(0), "{v}");
+}
+
+/// `tools/bench-pair`: one pair of the same binary (under validation, as every GPU test) prints both
+/// runs' goal rows and a finite ratio; a missing binary or a bad pair count is one line and exit 1.
+#[test]
+fn bench_pair_compares_two_binaries_in_turn() {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/bench-pair");
+    let bin = env!("CARGO_BIN_EXE_brdf-shop");
+    let run = |args: &[&str]| {
+        Command::new(&script).args(args).env("QUICK", "1").env("BRDF_SHOP_VALIDATION", "1").output().unwrap()
+    };
+    let out = run(&[bin, bin, "1"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary = text.lines().find(|l| l.contains("NEW/OLD over 1 pairs: median")).unwrap_or_else(|| panic!("{text}"));
+    let ratio: f64 = summary.split("median ").last().unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!(ratio.is_finite() && ratio > 0.0, "{summary}");
+    let dir = tempfile::TempDir::new().unwrap();
+    let missing = dir.path().join("brdf-shop");
+    let missing = missing.to_str().unwrap();
+    for (args, what) in [(&[missing, bin][..], "OLD"), (&[bin, bin, "0"][..], "PAIRS")] {
+        let out = run(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.lines().count() == 1 && err.contains(what), "{args:?}: {err}");
+    }
+}

@@ -21,12 +21,13 @@ fn unless_interrupted<T>(r: brdf_shop::Result<T>) -> anyhow::Result<T> {
     }
 }
 
-pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::Result<()> {
+pub fn bench(quick: bool, goal: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::Result<()> {
     if let Some(p) = json {
         brdf_shop::fsio::check_output("--json", p)?;
     }
     let mut plan = if quick { bench::Plan::quick() } else { bench::Plan::full() };
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
+    plan.goal_only = goal;
     // Refused before the device starts: a missing map leaves nothing written.
     brdf_shop::measure::require_maps(&plan.hdri, &[bench::ENV])?;
     let mut r = renderer()?;
@@ -45,13 +46,19 @@ pub fn bench(quick: bool, json: Option<&Path>, hdri: Option<&Path>) -> anyhow::R
             100.0 * brdf_shop::measure::control::CONTROL_TOLERANCE
         );
     }
-    let materials = vec![
-        ("default".to_string(), brdf_shop::brush::strokes::default_material()?),
-        ("8 lobes".to_string(), bench::material(8)),
-    ];
-    let frames = if quick { 4 } else { 20 };
-    let viewer = unless_interrupted(viewer::run(&mut r, &plan.viewer_sizes, &materials, frames))?;
-    print!("{}", viewer::table(&viewer, r.device_name()));
+    // `--goal`: the goal scene alone, no viewer rows.
+    let viewer = if goal {
+        Vec::new()
+    } else {
+        let materials = vec![
+            ("default".to_string(), brdf_shop::brush::strokes::default_material()?),
+            ("8 lobes".to_string(), bench::material(8)),
+        ];
+        let frames = if quick { 4 } else { 20 };
+        let viewer = unless_interrupted(viewer::run(&mut r, &plan.viewer_sizes, &materials, frames))?;
+        print!("{}", viewer::table(&viewer, r.device_name()));
+        viewer
+    };
     if let Some(path) = json {
         let mut doc = bench::json(&rows, r.device_name(), &plan, peak);
         doc["driver"] = bench::driver_json(&r.ctx.device.info);

@@ -152,6 +152,10 @@ enum Command {
         /// The small CI setting.
         #[arg(long)]
         quick: bool,
+        /// Only the goal scene, between a control row at the start and one at the end (a few
+        /// seconds; `tools/bench-pair` runs two binaries this way in turn).
+        #[arg(long)]
+        goal: bool,
         /// Also write the measurements as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -306,7 +310,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 frame_budget_ms: frame_budget,
             })?)
         }
-        Some(Command::Bench { quick, json, hdri }) => measure::bench(quick, json.as_deref(), hdri.as_deref()),
+        Some(Command::Bench { quick, goal, json, hdri }) => {
+            measure::bench(quick, goal, json.as_deref(), hdri.as_deref())
+        }
         Some(Command::Report(Report::ErrorVsTime { quick, out, hdri, maps, materials })) => {
             measure::error_vs_time(quick, &out, hdri.as_deref(), &maps, &materials)
         }

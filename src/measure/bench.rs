@@ -8,7 +8,8 @@
 //! disagree by more than `control::CONTROL_TOLERANCE` is unstable. Every configuration is warmed up
 //! (its pipelines built and run) before its timed frames. Each row states the lobe passes' cost per
 //! pixel-sample and the share of the device's arithmetic peak (`render::peak`) it reaches. Prints a
-//! table; writes JSON on request.
+//! table; writes JSON on request. `Plan::goal_only` (`bench --goal`) runs the goal row at the
+//! control size between a start and an end control row, and nothing else.
 
 use std::path::PathBuf;
 
@@ -44,6 +45,10 @@ pub struct Plan {
     pub viewer_sizes: Vec<(u32, u32)>,
     /// The folder holding [`ENV`] (`--hdri`; see `measure::hdri_dir`).
     pub hdri: PathBuf,
+    /// Only the goal scene at the control size, between a control row at the start and one at the
+    /// end (`bench --goal`): a run of a few seconds whose verdict still says whether the device held
+    /// its speed, for comparing binaries run after one another (`tools/bench-pair`).
+    pub goal_only: bool,
 }
 
 /// The environment every configuration is lit by, read from `Plan::hdri`.
@@ -65,6 +70,7 @@ impl Plan {
             warmup: 3,
             viewer_sizes: vec![(1280, 720), (1920, 1080), (3840, 2160)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
+            goal_only: false,
         }
     }
 
@@ -82,6 +88,7 @@ impl Plan {
             warmup: 1,
             viewer_sizes: vec![(320, 180)],
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
+            goal_only: false,
         }
     }
 }
@@ -291,16 +298,19 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     let four = material(4);
     let goal_material = goal_material()?;
     let mut out = Vec::new();
-    let total = 3
-        + plan.goal_sizes.len()
-        + 1
-        + plan.lobe_counts.len()
-        + plan.sizes.len()
-        + plan.tessellations.len()
-        + plan.spps.len()
-        + Estimator::ALL.len()
-        + 2
-        + 2;
+    let total = if plan.goal_only {
+        3
+    } else {
+        3 + plan.goal_sizes.len()
+            + 1
+            + plan.lobe_counts.len()
+            + plan.sizes.len()
+            + plan.tessellations.len()
+            + plan.spps.len()
+            + Estimator::ALL.len()
+            + 2
+            + 2
+    };
     let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
     // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
     let tick = || {
@@ -331,6 +341,17 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     let control = |r: &mut Renderer| measure(r, &goal_material, &goal_at(plan.control_size), warm, plan.goal_repeats);
     push("control", format!("{control_label}, start"), sphere.triangle_count(), control(r)?);
     tick()?;
+    if plan.goal_only {
+        let t = measure(r, &goal_material, &goal_at(plan.control_size), warm, plan.goal_repeats)?;
+        push("goal", control_label.clone(), sphere.triangle_count(), t);
+        tick()?;
+        push("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?);
+        tick()?;
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        return Ok(out);
+    }
     // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
     for (k, &size) in plan.goal_sizes.iter().enumerate() {
         let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
