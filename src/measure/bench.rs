@@ -342,77 +342,82 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
     push("control", format!("{control_label}, start"), sphere.triangle_count(), control(r)?);
     tick()?;
     if plan.goal_only {
-        let t = measure(r, &goal_material, &goal_at(plan.control_size), warm, plan.goal_repeats)?;
-        push("goal", control_label.clone(), sphere.triangle_count(), t);
+        // The goal row at the control size is the control rows' configuration.
+        push("goal", control_label.clone(), sphere.triangle_count(), control(r)?);
         tick()?;
-        push("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?);
-        tick()?;
-        if let Some(b) = bar {
-            b.finish_and_clear();
+    } else {
+        // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
+        for (k, &size) in plan.goal_sizes.iter().enumerate() {
+            let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
+            let t = measure(r, &goal_material, &goal_at(size), warm, repeats)?;
+            let samples = t.pixel_samples;
+            push("goal", format!("{}x{} key", size.0, size.1), sphere.triangle_count(), t);
+            tick()?;
+            // The same scene as the editor draws it while the camera stays (painting): the G-buffer
+            // kept; at the first goal size.
+            if k == 0 {
+                let kept = measure_kept(r, &goal_material, &goal_at(size), plan.goal_repeats, samples)?;
+                push("goal-kept", format!("{}x{} key, kept", size.0, size.1), sphere.triangle_count(), kept);
+                tick()?;
+            }
         }
-        return Ok(out);
-    }
-    // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
-    for (k, &size) in plan.goal_sizes.iter().enumerate() {
-        let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
-        let t = measure(r, &goal_material, &goal_at(size), warm, repeats)?;
-        let samples = t.pixel_samples;
-        push("goal", format!("{}x{} key", size.0, size.1), sphere.triangle_count(), t);
-        tick()?;
-        // The same scene as the editor draws it while the camera stays (painting): the G-buffer
-        // kept; at the first goal size.
-        if k == 0 {
-            let kept = measure_kept(r, &goal_material, &goal_at(size), plan.goal_repeats, samples)?;
-            push("goal-kept", format!("{}x{} key, kept", size.0, size.1), sphere.triangle_count(), kept);
+        for &n in &plan.lobe_counts {
+            let t = measure(r, &material(n), &settings(plan.size, 8), warm, plan.repeats)?;
+            push("lobes", format!("{n} lobes"), sphere.triangle_count(), t);
             tick()?;
         }
-    }
-    for &n in &plan.lobe_counts {
-        let t = measure(r, &material(n), &settings(plan.size, 8), warm, plan.repeats)?;
-        push("lobes", format!("{n} lobes"), sphere.triangle_count(), t);
+        for &size in &plan.sizes {
+            let t = measure(r, &four, &settings(size, 8), warm, plan.repeats)?;
+            push("size", format!("{}x{}", size.0, size.1), sphere.triangle_count(), t);
+            tick()?;
+        }
+        for &spp in &plan.spps {
+            let t = measure(r, &four, &settings(plan.size, spp), warm, plan.repeats)?;
+            push("spp", format!("{spp} spp"), sphere.triangle_count(), t);
+            tick()?;
+        }
+        push("control", format!("{control_label}, middle"), sphere.triangle_count(), control(r)?);
         tick()?;
+        // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
+        for e in Estimator::ALL {
+            let s = Settings { estimator: e, ..settings(plan.size, 8) };
+            push(
+                "estimator",
+                e.name().to_string(),
+                sphere.triangle_count(),
+                measure(r, &four, &s, warm, plan.repeats)?,
+            );
+            tick()?;
+        }
+        for vec4 in [true, false] {
+            r.scalar_lobes = !vec4;
+            let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
+            r.scalar_lobes = false;
+            push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
+            tick()?;
+        }
+        // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
+        for cull in [true, false] {
+            r.cull_hidden_faces = cull;
+            let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
+            r.cull_hidden_faces = true;
+            push(
+                "culling",
+                (if cull { "hidden culled" } else { "all faces" }).to_string(),
+                sphere.triangle_count(),
+                m?,
+            );
+            tick()?;
+        }
+        for &(seg, rings) in &plan.tessellations {
+            let mesh = Mesh::uv_sphere(seg, rings);
+            r.set_mesh(&mesh)?;
+            let t = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats)?;
+            push("triangles", format!("{} triangles", mesh.triangle_count()), mesh.triangle_count(), t);
+            tick()?;
+        }
+        r.set_mesh(&sphere)?;
     }
-    for &size in &plan.sizes {
-        let t = measure(r, &four, &settings(size, 8), warm, plan.repeats)?;
-        push("size", format!("{}x{}", size.0, size.1), sphere.triangle_count(), t);
-        tick()?;
-    }
-    for &spp in &plan.spps {
-        let t = measure(r, &four, &settings(plan.size, spp), warm, plan.repeats)?;
-        push("spp", format!("{spp} spp"), sphere.triangle_count(), t);
-        tick()?;
-    }
-    push("control", format!("{control_label}, middle"), sphere.triangle_count(), control(r)?);
-    tick()?;
-    // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
-    for e in Estimator::ALL {
-        let s = Settings { estimator: e, ..settings(plan.size, 8) };
-        push("estimator", e.name().to_string(), sphere.triangle_count(), measure(r, &four, &s, warm, plan.repeats)?);
-        tick()?;
-    }
-    for vec4 in [true, false] {
-        r.scalar_lobes = !vec4;
-        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-        r.scalar_lobes = false;
-        push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
-        tick()?;
-    }
-    // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
-    for cull in [true, false] {
-        r.cull_hidden_faces = cull;
-        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-        r.cull_hidden_faces = true;
-        push("culling", (if cull { "hidden culled" } else { "all faces" }).to_string(), sphere.triangle_count(), m?);
-        tick()?;
-    }
-    for &(seg, rings) in &plan.tessellations {
-        let mesh = Mesh::uv_sphere(seg, rings);
-        r.set_mesh(&mesh)?;
-        let t = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats)?;
-        push("triangles", format!("{} triangles", mesh.triangle_count()), mesh.triangle_count(), t);
-        tick()?;
-    }
-    r.set_mesh(&sphere)?;
     push("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?);
     tick()?;
     if let Some(b) = bar {
