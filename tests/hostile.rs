@@ -264,6 +264,11 @@ fn outputs_checked_first_and_left_alone() {
         1,
         &["--materials", "glass", "rough-gm"],
     );
+    // An image side outside the sweep's range: named with the range, before the work.
+    for side in ["4", "2000"] {
+        let r = cpu(&["report", "error-vs-time", "--quick", "--out", s(&fresh), "--size", side]);
+        refused(&r, 1, &["--size", side, "8 to 1024"]);
+    }
     refused(&cpu(&["demo", "--out", s(&existing.join("x"))]), 1, &["--out", "not a folder"]);
     refused(&cpu(&["edit", "--out", s(&missing), "--quit"]), 1, &["--out", "missing"]);
     assert_eq!(listing(d), ["a-folder", "env.exr", "f.exr", "old.png"]);

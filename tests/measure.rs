@@ -241,7 +241,8 @@ fn error_vs_time_quick_trends() {
     // GPU time than `fis` at 8 spp. Counted and printed, not asserted: on lavapipe at 32² both
     // estimators' whole frames are 2.1–3.4 ms, mostly the G-buffer pass's fixed cost, and `key`'s
     // filter pass for the rough lobes costs more than the margin, so the count follows the frames'
-    // noise.
+    // noise; at 256² studio's `painted-aniso` misses by time (docs/performance.md, Error against GPU
+    // time).
     let painted: Vec<_> = rows.iter().filter(|r| r.material.starts_with("painted")).cloned().collect();
     assert_eq!(painted.len(), plan.envs.len() * 2 * 4 * plan.spps.len(), "two painted materials");
     let (within, scenes) = error_vs_time::goal_count(&painted, |r| r.ms_median);
@@ -336,6 +337,13 @@ fn commands_run_through_the_binary() {
     let md = dir.path().join("stability.md");
     let text = run(&["report", "stability", "--quick", "--out", md.to_str().unwrap()]);
     assert!(text.contains("NaN/Inf") && md.exists(), "{text}");
+    // The sweep at another size, cut down to one map and one material: its summary says the size.
+    let evt = dir.path().join("evt");
+    let sweep = ["--size", "16", "--maps", "venice.exr", "--materials", "rough-gm", "--out", evt.to_str().unwrap()];
+    let text = run(&[&["report", "error-vs-time", "--quick"][..], &sweep[..]].concat());
+    assert!(text.contains("Sphere, 16x16") && text.contains("venice.exr/rough-gm"), "{text}");
+    let csv = std::fs::read_to_string(evt.join("error-vs-time.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4 * error_vs_time::Plan::quick().spps.len(), "{csv}");
     let out =
         Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(["report", "error-vs-time", "--quick"]).output().unwrap();
     assert_eq!(out.status.code(), Some(1), "a missing --out is a usage error");

@@ -81,9 +81,13 @@ pub fn error_vs_time(
     hdri: Option<&Path>,
     maps: &[String],
     materials: &[String],
+    size: Option<u32>,
 ) -> anyhow::Result<()> {
     let mut plan = if quick { error_vs_time::Plan::quick() } else { error_vs_time::Plan::full() };
     plan.restrict(maps, materials)?;
+    if let Some(side) = size {
+        plan.resize(side)?;
+    }
     brdf_shop::fsio::check_output_dir("--out", out)?;
     plan.hdri = brdf_shop::measure::hdri_dir(hdri);
     brdf_shop::measure::require_maps(&plan.hdri, &plan.envs)?;

@@ -194,6 +194,10 @@ enum Report {
         /// Only these of the plan's materials, comma-separated (e.g. `sharp-ward,rough-gm`).
         #[arg(long, value_delimiter = ',')]
         materials: Vec<String>,
+        /// The images' side in pixels, 8 to 1024 (default 64; with --quick 32). The CPU references
+        /// cost the square of it.
+        #[arg(long)]
+        size: Option<u32>,
     },
     /// NaN/Inf counts, GPU f32 against CPU f64 and maximum albedo over stiff and extreme inputs.
     Stability {
@@ -313,8 +317,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Bench { quick, goal, json, hdri }) => {
             measure::bench(quick, goal, json.as_deref(), hdri.as_deref())
         }
-        Some(Command::Report(Report::ErrorVsTime { quick, out, hdri, maps, materials })) => {
-            measure::error_vs_time(quick, &out, hdri.as_deref(), &maps, &materials)
+        Some(Command::Report(Report::ErrorVsTime { quick, out, hdri, maps, materials, size })) => {
+            measure::error_vs_time(quick, &out, hdri.as_deref(), &maps, &materials, size)
         }
         Some(Command::Report(Report::Stability { quick, out })) => measure::stability(quick, out.as_deref()),
         Some(Command::Reference(args)) => reference::run(&args),
