@@ -441,3 +441,54 @@ fn bench_pair_compares_two_binaries_in_turn() {
         assert!(err.lines().count() == 1 && err.contains(what), "{args:?}: {err}");
     }
 }
+
+/// `tools/gpu-bench` with a stand-in binary (no device needed: it runs the script's own logic): a
+/// stable bench writes the six files into `DEST`; an unstable one runs once more, and is written
+/// if that run is stable; two unstable runs exit with status 3 and write nothing.
+#[test]
+fn gpu_bench_reruns_an_unstable_bench_once_and_writes_only_a_stable_run() {
+    let dir = tempfile::TempDir::new().unwrap();
+    // The stand-in: `bench` answers stable from its STABLE_AT-th run on (counted in a file).
+    let fake = dir.path().join("fake-brdf-shop");
+    let count = dir.path().join("count");
+    let script = format!(
+        "#!/bin/sh\ncase \"$1\" in\ndevices) echo '* stand-in';;\n\
+         bench) n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n + 1)); echo $n >'{c}'\n  \
+         s=false; [ $n -ge $STABLE_AT ] && s=true; echo \"{{\\\"stable\\\": $s}}\" >\"$3\"; echo \"run $n\";;\n\
+         report) mkdir -p \"$5\"; for f in csv md png; do echo x >\"$5/error-vs-time.$f\"; done;;\n\
+         *) exit 2;;\nesac\n",
+        c = count.display()
+    );
+    std::fs::write(&fake, script).unwrap();
+    std::fs::set_permissions(&fake, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let run = |stable_at: u32| {
+        let _ = std::fs::remove_file(&count);
+        let dest = dir.path().join(format!("dest-{stable_at}"));
+        // Run from the temporary folder: no `.gl` loader packages or `.gpu-bench` there to use.
+        let out = Command::new(Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gpu-bench"))
+            .current_dir(dir.path())
+            .env("BIN", &fake)
+            .env("DEST", &dest)
+            .env("STABLE_AT", stable_at.to_string())
+            .output()
+            .unwrap();
+        let runs = std::fs::read_to_string(&count).unwrap().trim().parse::<u32>().unwrap();
+        let mut files: Vec<String> = std::fs::read_dir(&dest)
+            .map(|d| d.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect())
+            .unwrap_or_default();
+        files.sort();
+        (out.status.code(), runs, files, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let all: Vec<String> =
+        ["bench.json", "bench.txt", "error-vs-time.csv", "error-vs-time.md", "error-vs-time.png", "gpu.log"]
+            .map(String::from)
+            .to_vec();
+    let (code, runs, files, err) = run(1);
+    assert_eq!((code, runs, &files), (Some(0), 1, &all), "{err}");
+    let (code, runs, files, err) = run(2);
+    assert_eq!((code, runs, &files), (Some(0), 2, &all), "{err}");
+    assert!(err.contains("the bench once more"), "{err}");
+    let (code, runs, files, err) = run(3);
+    assert_eq!((code, runs, files.len()), (Some(3), 2, 0), "{err}");
+    assert!(err.contains("unstable run") && err.contains("nothing written"), "{err}");
+}
