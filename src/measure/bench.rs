@@ -290,14 +290,47 @@ fn settings((w, h): (u32, u32), spp: u32) -> Settings {
     }
 }
 
-/// Runs every group of the plan, with the control row at the start, in the middle and at the end.
+/// The rows measured so far and the progress bar: each row added ticks the bar and checks Ctrl-C
+/// (the CLI installs the handler; nothing is written).
+struct Rows {
+    out: Vec<Measurement>,
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl Rows {
+    fn add(&mut self, group: &'static str, label: String, triangles: usize, t: Times) -> Result<()> {
+        self.out.push(Measurement {
+            group,
+            label,
+            triangles,
+            passes: t.passes,
+            total: t.total,
+            frame: t.frame,
+            untimed: t.untimed,
+            pixel_samples: t.pixel_samples,
+        });
+        if let Some(b) = &self.bar {
+            b.inc(1);
+        }
+        if crate::interrupt::requested() {
+            return Err(crate::Error::input("bench", "interrupted"));
+        }
+        Ok(())
+    }
+}
+
+/// The goal scene's settings at `size`: the default estimator, 8 spp.
+fn goal_at(size: (u32, u32)) -> Settings {
+    Settings { estimator: Estimator::Key, ..settings(size, 8) }
+}
+
+/// Runs every group of the plan, with the control row at the start, in the middle and at the end
+/// (`Plan::goal_only`: the goal row at the control size between the first and the last).
 pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurement>> {
     let env = super::environment(&plan.hdri, ENV)?;
     r.set_environment(&env)?;
     let sphere = Mesh::sphere();
-    let four = material(4);
     let goal_material = goal_material()?;
-    let mut out = Vec::new();
     let total = if plan.goal_only {
         3
     } else {
@@ -311,119 +344,89 @@ pub fn run(r: &mut Renderer, plan: &Plan, progress: bool) -> Result<Vec<Measurem
             + 2
             + 2
     };
-    let bar = progress.then(|| indicatif::ProgressBar::new(total as u64));
-    // After each measurement: the bar, and Ctrl-C (the CLI installs the handler; nothing is written).
-    let tick = || {
-        if let Some(b) = &bar {
-            b.inc(1);
-        }
-        if crate::interrupt::requested() {
-            return Err(crate::Error::input("bench", "interrupted"));
-        }
-        Ok(())
-    };
-    let mut push = |group, label: String, triangles, t: Times| {
-        out.push(Measurement {
-            group,
-            label,
-            triangles,
-            passes: t.passes,
-            total: t.total,
-            frame: t.frame,
-            untimed: t.untimed,
-            pixel_samples: t.pixel_samples,
-        });
-    };
-    let warm = plan.warmup;
-    let goal_at = |size: (u32, u32)| Settings { estimator: Estimator::Key, ..settings(size, 8) };
+    let mut rows = Rows { out: Vec::new(), bar: progress.then(|| indicatif::ProgressBar::new(total as u64)) };
     let control_label = format!("{}x{} key", plan.control_size.0, plan.control_size.1);
     r.set_mesh(&sphere)?;
-    let control = |r: &mut Renderer| measure(r, &goal_material, &goal_at(plan.control_size), warm, plan.goal_repeats);
-    push("control", format!("{control_label}, start"), sphere.triangle_count(), control(r)?);
-    tick()?;
+    let control =
+        |r: &mut Renderer| measure(r, &goal_material, &goal_at(plan.control_size), plan.warmup, plan.goal_repeats);
+    rows.add("control", format!("{control_label}, start"), sphere.triangle_count(), control(r)?)?;
     if plan.goal_only {
         // The goal row at the control size is the control rows' configuration.
-        push("goal", control_label.clone(), sphere.triangle_count(), control(r)?);
-        tick()?;
+        rows.add("goal", control_label.clone(), sphere.triangle_count(), control(r)?)?;
     } else {
-        // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
-        for (k, &size) in plan.goal_sizes.iter().enumerate() {
-            let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
-            let t = measure(r, &goal_material, &goal_at(size), warm, repeats)?;
-            let samples = t.pixel_samples;
-            push("goal", format!("{}x{} key", size.0, size.1), sphere.triangle_count(), t);
-            tick()?;
-            // The same scene as the editor draws it while the camera stays (painting): the G-buffer
-            // kept; at the first goal size.
-            if k == 0 {
-                let kept = measure_kept(r, &goal_material, &goal_at(size), plan.goal_repeats, samples)?;
-                push("goal-kept", format!("{}x{} key, kept", size.0, size.1), sphere.triangle_count(), kept);
-                tick()?;
-            }
-        }
-        for &n in &plan.lobe_counts {
-            let t = measure(r, &material(n), &settings(plan.size, 8), warm, plan.repeats)?;
-            push("lobes", format!("{n} lobes"), sphere.triangle_count(), t);
-            tick()?;
-        }
-        for &size in &plan.sizes {
-            let t = measure(r, &four, &settings(size, 8), warm, plan.repeats)?;
-            push("size", format!("{}x{}", size.0, size.1), sphere.triangle_count(), t);
-            tick()?;
-        }
-        for &spp in &plan.spps {
-            let t = measure(r, &four, &settings(plan.size, spp), warm, plan.repeats)?;
-            push("spp", format!("{spp} spp"), sphere.triangle_count(), t);
-            tick()?;
-        }
-        push("control", format!("{control_label}, middle"), sphere.triangle_count(), control(r)?);
-        tick()?;
-        // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
-        for e in Estimator::ALL {
-            let s = Settings { estimator: e, ..settings(plan.size, 8) };
-            push(
-                "estimator",
-                e.name().to_string(),
-                sphere.triangle_count(),
-                measure(r, &four, &s, warm, plan.repeats)?,
-            );
-            tick()?;
-        }
-        for vec4 in [true, false] {
-            r.scalar_lobes = !vec4;
-            let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-            r.scalar_lobes = false;
-            push("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), sphere.triangle_count(), m?);
-            tick()?;
-        }
-        // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
-        for cull in [true, false] {
-            r.cull_hidden_faces = cull;
-            let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-            r.cull_hidden_faces = true;
-            push(
-                "culling",
-                (if cull { "hidden culled" } else { "all faces" }).to_string(),
-                sphere.triangle_count(),
-                m?,
-            );
-            tick()?;
-        }
-        for &(seg, rings) in &plan.tessellations {
-            let mesh = Mesh::uv_sphere(seg, rings);
-            r.set_mesh(&mesh)?;
-            let t = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats)?;
-            push("triangles", format!("{} triangles", mesh.triangle_count()), mesh.triangle_count(), t);
-            tick()?;
-        }
-        r.set_mesh(&sphere)?;
+        survey(r, plan, &mut rows, &sphere, &goal_material)?;
+        rows.add("control", format!("{control_label}, middle"), sphere.triangle_count(), control(r)?)?;
+        variants(r, plan, &mut rows, &sphere)?;
     }
-    push("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?);
-    tick()?;
-    if let Some(b) = bar {
+    rows.add("control", format!("{control_label}, end"), sphere.triangle_count(), control(r)?)?;
+    if let Some(b) = rows.bar {
         b.finish_and_clear();
     }
-    Ok(out)
+    Ok(rows.out)
+}
+
+/// The groups before the middle control row: the goal scene at each goal size (and with its
+/// G-buffer kept), then the bench's four-lobe material by lobe count, size and sample count.
+fn survey(r: &mut Renderer, plan: &Plan, rows: &mut Rows, sphere: &Mesh, goal_material: &Material) -> Result<()> {
+    let (warm, triangles, four) = (plan.warmup, sphere.triangle_count(), material(4));
+    // The goal scene: the default estimator on diffuse + 4 lobes, at each goal size.
+    for (k, &size) in plan.goal_sizes.iter().enumerate() {
+        let repeats = if size == plan.size { plan.goal_repeats } else { plan.repeats };
+        let t = measure(r, goal_material, &goal_at(size), warm, repeats)?;
+        let samples = t.pixel_samples;
+        rows.add("goal", format!("{}x{} key", size.0, size.1), triangles, t)?;
+        // The same scene as the editor draws it while the camera stays (painting): the G-buffer
+        // kept; at the first goal size.
+        if k == 0 {
+            let kept = measure_kept(r, goal_material, &goal_at(size), plan.goal_repeats, samples)?;
+            rows.add("goal-kept", format!("{}x{} key, kept", size.0, size.1), triangles, kept)?;
+        }
+    }
+    for &n in &plan.lobe_counts {
+        let t = measure(r, &material(n), &settings(plan.size, 8), warm, plan.repeats)?;
+        rows.add("lobes", format!("{n} lobes"), triangles, t)?;
+    }
+    for &size in &plan.sizes {
+        let t = measure(r, &four, &settings(size, 8), warm, plan.repeats)?;
+        rows.add("size", format!("{}x{}", size.0, size.1), triangles, t)?;
+    }
+    for &spp in &plan.spps {
+        let t = measure(r, &four, &settings(plan.size, spp), warm, plan.repeats)?;
+        rows.add("spp", format!("{spp} spp"), triangles, t)?;
+    }
+    Ok(())
+}
+
+/// The groups after the middle control row, the four-lobe material at the plan's size: the
+/// estimators, `vec4` against scalar lobe passes, culling, and the triangle counts (ending on the
+/// sphere again).
+fn variants(r: &mut Renderer, plan: &Plan, rows: &mut Rows, sphere: &Mesh) -> Result<()> {
+    let (warm, triangles, four) = (plan.warmup, sphere.triangle_count(), material(4));
+    // The estimators on the same frame (8 spp; `mis` 8 per pixel): the default `key` against the paper's.
+    for e in Estimator::ALL {
+        let s = Settings { estimator: e, ..settings(plan.size, 8) };
+        rows.add("estimator", e.name().to_string(), triangles, measure(r, &four, &s, warm, plan.repeats)?)?;
+    }
+    for vec4 in [true, false] {
+        r.scalar_lobes = !vec4;
+        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
+        r.scalar_lobes = false;
+        rows.add("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), triangles, m?)?;
+    }
+    // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
+    for cull in [true, false] {
+        r.cull_hidden_faces = cull;
+        let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
+        r.cull_hidden_faces = true;
+        rows.add("culling", (if cull { "hidden culled" } else { "all faces" }).to_string(), triangles, m?)?;
+    }
+    for &(seg, rings) in &plan.tessellations {
+        let mesh = Mesh::uv_sphere(seg, rings);
+        r.set_mesh(&mesh)?;
+        let t = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats)?;
+        rows.add("triangles", format!("{} triangles", mesh.triangle_count()), mesh.triangle_count(), t)?;
+    }
+    r.set_mesh(sphere)
 }
 
 /// The whole-frame medians of the control rows (start, middle, end) and of the goal row of their
