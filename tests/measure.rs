@@ -451,14 +451,16 @@ fn gpu_bench_reruns_an_unstable_bench_once_and_writes_only_a_stable_run() {
     // The stand-in: `bench` answers stable from its STABLE_AT-th run on (counted in a file).
     let fake = dir.path().join("fake-brdf-shop");
     let count = dir.path().join("count");
-    let script = format!(
-        "#!/bin/sh\ncase \"$1\" in\ndevices) echo '* stand-in';;\n\
-         bench) n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n + 1)); echo $n >'{c}'\n  \
-         s=false; [ $n -ge $STABLE_AT ] && s=true; echo \"{{\\\"stable\\\": $s}}\" >\"$3\"; echo \"run $n\";;\n\
-         report) mkdir -p \"$5\"; for f in csv md png; do echo x >\"$5/error-vs-time.$f\"; done;;\n\
-         *) exit 2;;\nesac\n",
-        c = count.display()
-    );
+    let script = r#"#!/bin/sh
+case "$1" in
+devices) echo '* stand-in';;
+bench) n=$(cat 'COUNT' 2>/dev/null || echo 0); n=$((n + 1)); echo $n >'COUNT'
+  s=false; [ $n -ge $STABLE_AT ] && s=true; echo "{\"stable\": $s}" >"$3"; echo "run $n";;
+report) mkdir -p "$5"; for f in csv md png; do echo x >"$5/error-vs-time.$f"; done;;
+*) exit 2;;
+esac
+"#
+    .replace("COUNT", count.to_str().unwrap());
     std::fs::write(&fake, script).unwrap();
     std::fs::set_permissions(&fake, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
     let run = |stable_at: u32| {
