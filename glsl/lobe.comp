@@ -27,6 +27,8 @@
 // tiles, `keylight::tiles`): light_set holds the lights' (or tiles') four points each,
 // vec4(direction, 0), vec4(power / 4, 0), and the light term is
 // Σ F(ω) cos θ P, exact to second order in the light's size over the lobe's; no MIS, no light noise.
+// ORIENTED_LIGHTS (POINTS, an anisotropic lobe of one component): the lights cut into strips
+// across the lobe's narrow axis at ORIENTATIONS orientations, of which each pixel runs one.
 // REACH_TEST (LIGHTS, a narrow lobe of one component, `lobe::Variant::reach`; a facet lobe tested in
 // its facet frame): a pixel whose lobe cannot reach any light (`lobe_sees_lights`) skips the light
 // term: no light samples, and its BRDF samples do not look for the lights. With POINTS (tiles) each
@@ -85,6 +87,10 @@ const bool ANY_OUTPUT = OUTPUT == 4u;
 // the test of each slot past them, a copy of the last light, is left out (both sides of an `if`
 // run on llvmpipe, so only a constant can take it away).
 layout(constant_id = 13) const uint LIGHT_SLOTS = 4u;
+// POINTS: how many of the first lights are strips (`keylight::strips`): light k < ORIENTED_LIGHTS
+// holds ORIENTATIONS sets of as many points, and a pixel runs the set of its lobe's narrow axis at
+// the light (lobe_lights.glsl `strip_range`); its rows end at pc.light[k] as a tile set's do.
+layout(constant_id = 14) const uint ORIENTED_LIGHTS = 0u;
 
 layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 layout(set = 0, binding = 1, rgba32f) uniform image2D accum;

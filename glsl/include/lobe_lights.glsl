@@ -221,6 +221,37 @@ uint lobe_near_lights(Frame f, vec4 shape, vec4 q, vec3 wo) {
 }
 bool lobe_sees_lights(Frame f, vec4 shape, vec4 q, vec3 wo) { return lobe_near_lights(f, shape, q, wo) != 0u; }
 
+// Strips (ORIENTED_LIGHTS, `keylight::strips`): a light cut across a lobe's narrow axis at
+// ORIENTATIONS orientations π / ORIENTATIONS apart, measured in the plane tangent at the light's
+// direction l from the axes `strip_frame` gives (`strips::frame`: e1 = ŷ × l normalised, x̂ × l
+// near the poles, e2 = l × e1). The lobe's exponent grows with t² / α², t = (H · y) / (H · z) the
+// slope of the half vector H = l + b along its narrow axis y (z its normal: the facet normal, else
+// the surface's; b the view it is sampled about), so the narrow axis crosses the light along
+// y − t z projected onto that plane; the pixel runs the orientation nearest its angle, modulo π
+// (`strips::orientation` computes the same). One orientation's sets are the light's rows split in
+// ORIENTATIONS equal parts.
+#define ORIENTATIONS 16u
+uint strip_orientation(vec3 l, PointView v) {
+    vec3 y = dot(v.ay, v.ay) >= dot(v.ax, v.ax) ? v.ay : v.ax;  // the larger 1/α: the narrow axis
+    vec3 h = l + v.bw;
+    float t = dot(h, y) / dot(h, v.az);
+    vec3 d = y - t * v.az;
+    d -= dot(d, l) * l;
+    vec3 e1 = normalize(abs(l.y) < 0.9 ? cross(vec3(0.0, 1.0, 0.0), l) : cross(vec3(1.0, 0.0, 0.0), l));
+    vec3 e2 = cross(l, e1);
+    float o = round(atan(dot(d, e2), dot(d, e1)) * (float(ORIENTATIONS) / PI));
+    // A NaN (a degenerate view) or ±∞ takes orientation 0: its lobe adds nothing there anyway.
+    return abs(o) <= float(ORIENTATIONS) ? uint(int(o) + int(ORIENTATIONS)) % ORIENTATIONS : 0u;
+}
+// The rows light k's points take at a pixel of view v, from its rows [start, end): one
+// orientation's strips for an oriented light, all of them otherwise.
+uvec2 strip_range(uint k, uint start, uint end, PointView v) {
+    if (k >= ORIENTED_LIGHTS) return uvec2(start, end);
+    uint per = (end - start) / ORIENTATIONS;
+    uint o = strip_orientation(g_cone[k].xyz, v);
+    return uvec2(start + o * per, start + (o + 1u) * per);
+}
+
 // Σ F cos θ P over the points [start, end) of light_set at a pixel of normal n (`point_view`s v1, and
 // v2 for a split lobe's other view, F the mean of the two): a plain counted loop into a local sum,
 // no branch in its body.
@@ -246,7 +277,10 @@ vec3 near_points(uint near, vec3 n, PointView v1, PointView v2) {
     uint start = 0u;
     for (uint k = 0u; start < pc.params.w && k < uint(MAX_LIGHTS); k++) {
         uint end = uint(pc.light[k]);
-        if ((near & (1u << k)) != 0u) sum += point_range(start, end, n, v1, v2);
+        if ((near & (1u << k)) != 0u) {
+            uvec2 r = strip_range(k, start, end, v1);
+            sum += point_range(r.x, r.y, n, v1, v2);
+        }
         start = end;
     }
     return sum;
@@ -267,8 +301,12 @@ void light_samples(Frame f, vec3 b) {
         vec4 q = ROTATED ? g_lobe.rotation : vec4(0.0, 0.0, 0.0, 1.0);
         PointView v1 = lobe_view(f, q, g_wo, shape, false);
         PointView v2 = SPLIT ? lobe_view(f, q, g_wo, shape, true) : v1;
-        if (!REACH_TEST) {
+        if (!REACH_TEST && ORIENTED_LIGHTS == 0u) {
             g_light_sum += point_range(0u, pc.params.w, f.n, v1, v2);
+            return;
+        }
+        if (!REACH_TEST) {
+            g_light_sum += near_points(0xfu, f.n, v1, v2);
             return;
         }
         g_light_sum += near_points(lobe_near_lights(f, shape, q, g_wo), f.n, v1, v2);
@@ -316,22 +354,33 @@ void block_points(ivec2 c, GpuLobe l, vec4 q) {
         // Set for a pixel past the image's edge too (its G-buffer texel clamped; it takes nothing).
         bool facing_eye = shaded(px, gbuffer_texel(imageLoad(gnrm, min(px, ivec2(pc.size.xy) - 1)).x), f, wo);
         bool in_reach = inside(px) && facing_eye;
-        uint bits = REACH_TEST ? lobe_near_lights(f, l.shape, q, wo) : 1u;
+        uint bits = REACH_TEST ? lobe_near_lights(f, l.shape, q, wo) : 0xfu;
         take[k] = in_reach && bits != 0u;
         if (in_reach) near |= bits;
         v1[k] = lobe_view(f, q, wo, l.shape, false);
         v2[k] = SPLIT ? lobe_view(f, q, wo, l.shape, true) : v1[k];
         n[k] = f.n;
     }
+    // Strips: the block's first pixel that takes them sets the orientation (neighbours differ
+    // by a fraction of a step but for creases).
+    PointView ov = v1[0];
+    bool found = false;
+    [[unroll]] for (int k = 0; k < 4; k++) {
+        if (take[k] && !found) {
+            ov = v1[k];
+            found = true;
+        }
+    }
     vec3 sum[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    // Without the reach test, one range of every light's points; with it, one a light, as in
-    // `near_points`. A loop only for blocks with a pixel in reach (a vector of blocks without one
+    // Without the reach test or strips, one range of every light's points; with either, one a
+    // light, as in `near_points`. A loop only for blocks with a pixel in reach (a vector of blocks without one
     // runs its body once, masked).
     uint start = 0u;
     for (uint j = 0u; start < pc.params.w && j < uint(MAX_LIGHTS); j++) {
-        uint end = REACH_TEST ? uint(pc.light[j]) : pc.params.w;
+        uint end = REACH_TEST || ORIENTED_LIGHTS > 0u ? uint(pc.light[j]) : pc.params.w;
         if ((near & (1u << j)) != 0u) {
-            for (uint s = start; s < end; s++) {
+            uvec2 r = strip_range(j, start, end, ov);
+            for (uint s = r.x; s < r.y; s++) {
                 vec4 a = light_set.v[2u * s];
                 vec3 L = light_set.v[2u * s + 1u].rgb;
                 [[unroll]] for (int k = 0; k < 4; k++) {

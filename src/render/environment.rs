@@ -86,6 +86,10 @@ fn point_set(ctx: &Context, rows: &[[f32; 8]], name: &str) -> Result<Buffer> {
 /// A lobe's tiles (`keylight::tiles::tile_points`), or `None` where they do not fit.
 type Tiles = Option<keylight::tiles::TileSet>;
 
+/// What a lobe's tiles are made for: the cut's roughness bits ([`Cut`]), the point allowance and
+/// the lights.
+type TilesKey = ((u64, u64), usize, TileLights);
+
 /// Which lights a lobe's tiles are made of ([`GpuKeyLights::tiles`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TileLights {
@@ -96,6 +100,32 @@ pub enum TileLights {
     /// The key lights' tiles, then each wide light as its own four points
     /// (`lobe::sees_wide_lights_as_points`).
     KeyAndWidePoints,
+}
+
+/// How a lobe's tiles cut the lights ([`GpuKeyLights::tiles`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cut {
+    /// Round tiles for a lobe of this roughness (`keylight::tiles::tile_alpha`).
+    Tiles(f64),
+    /// Strips across the narrow axis of a lobe of these narrow and wide roughnesses
+    /// (`keylight::strips`).
+    Strips(f64, f64),
+}
+
+impl Cut {
+    fn key(self) -> (u64, u64) {
+        match self {
+            Cut::Tiles(a) => (a.to_bits(), 0),
+            Cut::Strips(n, w) => (n.to_bits(), w.to_bits()),
+        }
+    }
+
+    fn points(self, lights: &[keylight::KeyLight], max_points: usize) -> Tiles {
+        match self {
+            Cut::Tiles(a) => keylight::tiles::tile_points(lights, a, max_points),
+            Cut::Strips(n, w) => keylight::strips::strip_points(lights, n, w, max_points),
+        }
+    }
 }
 
 /// How many lobes' tiles a map keeps (`GpuKeyLights::tiles`; all are dropped when it is full).
@@ -126,7 +156,7 @@ pub struct GpuKeyLights {
     /// The tiles made so far (`keylight::tiles`), by lobe roughness, point allowance and whether
     /// they cut the wide lights too: a frame asks for them per lobe, and an edit changes one lobe
     /// at a time.
-    tiles: RefCell<HashMap<(u64, usize, TileLights), Tiles>>,
+    tiles: RefCell<HashMap<TilesKey, Tiles>>,
 }
 
 /// The wide lights on the GPU: the residual map without them (and without the key lights), and
@@ -247,20 +277,22 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 }
 
 impl GpuKeyLights {
-    /// The tiles (`keylight::tiles::tile_points`) for a lobe of roughness `alpha` (`tiles::tile_alpha`) and at most
-    /// `max_points` points, of the lights `which` says (`None` for the wide lights on a map without
-    /// any), made once per map (at most `TILES_KEPT` kept).
-    pub fn tiles(&self, alpha: f64, max_points: usize, which: TileLights) -> Tiles {
-        let key = (alpha.to_bits(), max_points, which);
+    /// The tiles or strips (`cut`) for a lobe, at most `max_points` points a pixel, of the lights
+    /// `which` says (`None` for the wide lights on a map without any), made once per map (at most
+    /// `TILES_KEPT` kept).
+    pub fn tiles(&self, cut: Cut, max_points: usize, which: TileLights) -> Tiles {
+        let key = (cut.key(), max_points, which);
         if let Some(made) = self.tiles.borrow().get(&key) {
             return made.clone();
         }
         let made = match (which, &self.wide) {
-            (TileLights::Key, _) => keylight::tiles::tile_points(&self.lights, alpha, max_points),
-            (TileLights::KeyAndWide, Some(w)) => keylight::tiles::tile_points(&w.all, alpha, max_points),
+            (TileLights::Key, _) => cut.points(&self.lights, max_points),
+            (TileLights::KeyAndWide, Some(w)) => cut.points(&w.all, max_points),
             (TileLights::KeyAndWidePoints, Some(w)) => {
                 let left = max_points.checked_sub(4 * w.lights.len())?;
-                keylight::tiles::tile_points(&self.lights, alpha, left).map(|t| t.and_points(&w.lights))
+                let made = cut.points(&self.lights, left).map(|t| t.and_points(&w.lights));
+                // The wide lights' points fit the block too.
+                made.filter(|t| t.rows.len() <= keylight::tiles::MAX_BLOCK_POINTS)
             }
             (_, None) => return None,
         };

@@ -74,6 +74,9 @@ pub struct Variant {
     /// With `reach`, how many lights its cone table holds (`lobe.comp` `LIGHT_SLOTS`): the test of
     /// the table's padding (copies of the last light) is left out. [`MAX_LIGHTS`] otherwise.
     pub light_slots: u8,
+    /// With `points`, how many of the first lights are strips (`keylight::strips`, `lobe.comp`
+    /// `ORIENTED_LIGHTS`): each pixel runs the strips of one orientation of each.
+    pub oriented: u8,
 }
 
 /// Where a lobe pass writes, `lobe.comp`'s `OUTPUT`: the accumulation image, the dense filter's
@@ -126,6 +129,7 @@ impl Variant {
             reach: false,
             output: Output::Accum,
             light_slots: MAX_LIGHTS as u8,
+            oriented: 0,
         }
     }
 
@@ -144,6 +148,7 @@ impl Variant {
             (self.points, "points"),
             (self.wide, "wide"),
             (self.reach, "reach"),
+            (self.oriented > 0, "strips"),
         ]
         .iter()
         .filter(|f| f.0)
@@ -165,7 +170,7 @@ impl Variant {
         Variant { output: Output::Any, ..self }
     }
 
-    fn constants(&self) -> [u32; 14] {
+    fn constants(&self) -> [u32; 15] {
         let output = match self.output {
             Output::Accum => 0,
             Output::Rough => 1,
@@ -188,9 +193,10 @@ impl Variant {
             self.reach,
         ]
         .map(u32::from);
-        let mut constants = [output; 14];
+        let mut constants = [output; 15];
         constants[..12].copy_from_slice(&flags);
         constants[13] = u32::from(self.light_slots);
+        constants[14] = u32::from(self.oriented);
         constants
     }
 }
@@ -460,6 +466,19 @@ impl LobePass {
             if !fits {
                 return Err(crate::Error::Validation(format!(
                     "a lobe pass tests its lights' reach with ends {ends:?} for {slots} lights of {m} points"
+                )));
+            }
+        }
+        if variant.oriented > 0 {
+            // Each oriented light's rows are `ORIENTATIONS` sets of as many points.
+            let n = usize::from(variant.oriented);
+            let sets = crate::scene::keylight::strips::ORIENTATIONS as u32;
+            let fits = variant.points
+                && n <= MAX_LIGHTS
+                && ends.is_some_and(|e| (0..n).all(|k| (e[k] - if k == 0 { 0 } else { e[k - 1] }) % sets == 0));
+            if !fits {
+                return Err(crate::Error::Validation(format!(
+                    "a lobe pass runs {n} lights' strips with ends {ends:?} of {m} points"
                 )));
             }
         }

@@ -123,6 +123,10 @@ pub struct Renderer {
     /// Let the `key` lobe passes of lobes too narrow for the lights' own points see them as tiles
     /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
     pub light_tiles: bool,
+    /// Let the `key` lobe passes of anisotropic lobes of one component see the lights as strips
+    /// across their narrow axis (`keylight::strips`) where those run fewer points a pixel than the
+    /// round tiles; false keeps the round tiles (a test compares the two).
+    pub light_strips: bool,
     /// Let the `key` lobe passes that see the key lights as points or tiles but the wide lights not
     /// as points take the key and wide lights as tiles together, where those fit, and sample the
     /// residual without both, in frames of at least [`lobe::WIDE_TILES_MIN_SPP`] samples (with
@@ -198,6 +202,7 @@ impl Renderer {
             light_reach_test: true,
             wide_lights: true,
             light_tiles: true,
+            light_strips: true,
             wide_tiles: true,
             denoise: true,
             sparse_filter: true,

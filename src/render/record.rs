@@ -4,7 +4,7 @@
 
 use ash::vk;
 
-use super::environment::{GpuEnvironment, GpuWideLights, TileLights};
+use super::environment::{Cut, GpuEnvironment, GpuWideLights, TileLights};
 use super::gpu::{self, Push};
 use super::targets::Targets;
 use super::{
@@ -227,14 +227,27 @@ impl Renderer {
                 let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
                 let mut tiled = false;
                 if let Some(k) = key_lights.filter(|_| !wide && self.light_tiles) {
-                    let alpha = tile_alpha(l.alpha_x, l.alpha_y);
+                    // Round tiles, or for an anisotropic lobe of one component strips across its
+                    // narrow axis (`keylight::strips`), whichever runs fewer points a pixel.
+                    let round = Cut::Tiles(tile_alpha(l.alpha_x, l.alpha_y));
+                    let v = lobe::Variant::of(material, l, prefilter);
+                    let (narrow, broad) = (l.alpha_x.min(l.alpha_y), l.alpha_x.max(l.alpha_y));
+                    let streak = (self.light_strips && !(v.split || v.sym) && narrow < broad)
+                        .then_some(Cut::Strips(narrow, broad));
+                    let cut = |budget: usize, which: TileLights| match (
+                        k.tiles(round, budget, which),
+                        streak.and_then(|c| k.tiles(c, budget, which)),
+                    ) {
+                        (Some(t), Some(s)) if s.points_seen() >= t.points_seen() => Some(t),
+                        (t, s) => s.or(t),
+                    };
                     // The key and wide lights together first (also for a lobe that sees the key
                     // lights as points: those are then their own one tile), where the reach test
                     // (if it pays) sees them all; their tiles take the wide lights off the residual.
                     let wide_tiles = self.wide_tiles && settings.spp >= lobe::WIDE_TILES_MIN_SPP;
                     let tested = |w: &&GpuWideLights| !pays || w.cones.is_some();
                     if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
-                        if let Some(rows) = k.tiles(alpha, max_points(&w.all, reach), TileLights::KeyAndWide) {
+                        if let Some(rows) = cut(max_points(&w.all, reach), TileLights::KeyAndWide) {
                             tile_set = Some(rows);
                             (tiled, wide) = (true, true);
                         }
@@ -251,13 +264,13 @@ impl Renderer {
                     let key_points = max_points(&k.lights, reach);
                     if let Some(w) = wide_lights.filter(|w| !tiled && wide_points(w)) {
                         let budget = key_points + 4 * w.lights.len();
-                        if let Some(rows) = k.tiles(alpha, budget, TileLights::KeyAndWidePoints) {
+                        if let Some(rows) = cut(budget, TileLights::KeyAndWidePoints) {
                             tile_set = Some(rows);
                             (tiled, wide) = (true, true);
                         }
                     }
                     if !tiled && !whole {
-                        if let Some(rows) = k.tiles(alpha, key_points, TileLights::Key) {
+                        if let Some(rows) = cut(key_points, TileLights::Key) {
                             tile_set = Some(rows);
                             tiled = true;
                         }
@@ -279,6 +292,7 @@ impl Renderer {
                     wide,
                     reach: tests_reach,
                     light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
+                    oriented: tile_set.as_ref().map_or(0, |t| t.oriented as u8),
                     ..lobe::Variant::of(material, l, prefilter)
                 };
                 (i as u32, variant, tile_set)
@@ -495,6 +509,7 @@ impl Renderer {
                 }
                 for (&(i, v), &into) in lobes.iter().zip(&intos) {
                     let name = match tiles.iter().find(|t| t.0 == i) {
+                        Some((_, t)) if t.oriented > 0 => format!("lobe{i}[{} {}]", v.tag(), t.points_seen()),
                         Some((_, t)) => format!("lobe{i}[{},tiles {}]", v.tag(), t.rows.len()),
                         None => format!("lobe{i}[{}]", v.tag()),
                     };

@@ -23,6 +23,7 @@ use glam::DVec3;
 
 use super::env::Environment;
 
+pub mod strips;
 pub mod tiles;
 
 /// A texel belongs to a light where its luminance exceeds this multiple of the map's mean

@@ -89,9 +89,10 @@ impl KeyLightSummary {
             spread / QUADRATURE_RATIO,
             match self.tiles_min_alpha() {
                 Some(a) => format!(
-                    "those with min(αx, αy) ≥ {a:.4} (isotropic) as tiles of 4 points each (at most {} points, up to {} where a narrow lobe tests its reach), the others by MIS",
+                    "those with min(αx, αy) ≥ {a:.4} (isotropic) as tiles of 4 points each (at most {} points, up to {} where a narrow lobe tests its reach), an anisotropic lobe of one component with max(αx, αy) ≥ {:.4} as strips across its narrow axis where those run fewer points, the others by MIS",
                     crate::scene::keylight::tiles::MAX_TILE_POINTS,
-                    crate::scene::keylight::tiles::MAX_BLOCK_POINTS
+                    crate::scene::keylight::tiles::MAX_BLOCK_POINTS,
+                    spread / QUADRATURE_RATIO
                 ),
                 None => "the others by MIS".to_string(),
             }

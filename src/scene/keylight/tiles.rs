@@ -112,15 +112,15 @@ pub struct LightTexel {
 }
 
 /// A tile: its texels (indices into the light's region), four points, power and moment.
-struct Tile {
-    texels: Vec<usize>,
-    points: [DVec3; 4],
-    power: [f64; 3],
+pub(super) struct Tile {
+    pub(super) texels: Vec<usize>,
+    pub(super) points: [DVec3; 4],
+    pub(super) power: [f64; 3],
     /// `|W| s⁴`, infinite where the signs cancel.
-    moment: f64,
+    pub(super) moment: f64,
 }
 
-fn tile(region: &[LightTexel], texels: Vec<usize>) -> Tile {
+pub(super) fn tile(region: &[LightTexel], texels: Vec<usize>) -> Tile {
     let net: f64 = texels.iter().map(|&k| region[k].weight).sum();
     let abs: f64 = texels.iter().map(|&k| region[k].weight.abs()).sum();
     let sign = if net < 0.0 { -1.0 } else { 1.0 };
@@ -144,7 +144,7 @@ fn tile(region: &[LightTexel], texels: Vec<usize>) -> Tile {
 /// that its `sin θ` gives it (the map is read texel by texel, nearest: the radiance is the same over
 /// the texel). A texel is split only for a lobe narrower than it, where its own extent is what the
 /// four points of one texel cannot follow.
-fn quarters(t: &LightTexel) -> [LightTexel; 4] {
+pub(super) fn quarters(t: &LightTexel) -> [LightTexel; 4] {
     let offsets = [[-0.25, -0.25], [0.25, -0.25], [-0.25, 0.25], [0.25, 0.25]];
     let uv = offsets.map(|o| [t.uv[0] + o[0] * t.size[0], t.uv[1] + o[1] * t.size[1]]);
     let sin = uv.map(|p| (std::f64::consts::PI * p[1]).sin().max(0.0));
@@ -234,6 +234,9 @@ pub struct TileSet {
     pub rows: Vec<[f32; 8]>,
     /// The end of light `k`'s rows in `rows`, one per light, the last `rows.len()`.
     pub ends: Vec<usize>,
+    /// How many of the first lights are cut into strips ([`super::strips`]): each of their rows
+    /// holds [`super::strips::ORIENTATIONS`] sets of as many points, of which a pixel takes one.
+    pub oriented: usize,
 }
 
 impl TileSet {
@@ -244,6 +247,30 @@ impl TileSet {
             self.ends.push(self.rows.len());
         }
         self
+    }
+
+    /// The rows a pixel runs: every light's, but one orientation's strips of each oriented light,
+    /// `orientation(k)` for light `k`.
+    pub fn rows_seen(&self, orientation: impl Fn(usize) -> usize) -> Vec<[f32; 8]> {
+        let mut start = 0;
+        let mut seen = Vec::new();
+        for (k, &end) in self.ends.iter().enumerate() {
+            let rows = &self.rows[start..end];
+            if k < self.oriented {
+                let per = rows.len() / super::strips::ORIENTATIONS;
+                let o = orientation(k) % super::strips::ORIENTATIONS;
+                seen.extend_from_slice(&rows[o * per..(o + 1) * per]);
+            } else {
+                seen.extend_from_slice(rows);
+            }
+            start = end;
+        }
+        seen
+    }
+
+    /// How many points a pixel runs ([`TileSet::rows_seen`]).
+    pub fn points_seen(&self) -> usize {
+        self.rows_seen(|_| 0).len()
     }
 }
 
@@ -256,7 +283,8 @@ pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option
         return None;
     }
     if super::quadrature_fits(lights, alpha, alpha) {
-        return Some(TileSet { rows: super::point_table(lights), ends: (1..=lights.len()).map(|k| 4 * k).collect() });
+        let ends = (1..=lights.len()).map(|k| 4 * k).collect();
+        return Some(TileSet { rows: super::point_table(lights), ends, oriented: 0 });
     }
     let mut rows = Vec::new();
     let mut ends = Vec::with_capacity(lights.len());
@@ -268,7 +296,7 @@ pub fn tile_points(lights: &[KeyLight], alpha: f64, max_points: usize) -> Option
         }
         ends.push(rows.len());
     }
-    Some(TileSet { rows, ends })
+    Some(TileSet { rows, ends, oriented: 0 })
 }
 
 /// The smallest `alpha` (to 1 %) whose tiles fit in `max_points(alpha)` points, or `None` when no
