@@ -238,11 +238,11 @@ fn error_vs_time_quick_trends() {
         assert!(k1 <= 0.08, "{env} rough-gm: key at 1 spp {k1}, over 8 %");
     }
     // The frontier goal on the painted reciprocal scenes: `key` within 8 % at no more whole-frame
-    // GPU time than `fis` at 8 spp. Counted and printed, not asserted: on lavapipe at 32² both
-    // estimators' whole frames are 2.1–3.4 ms, mostly the G-buffer pass's fixed cost, and `key`'s
+    // GPU time than `fis` at 8 spp. Its time half is counted and printed, not asserted: on
+    // lavapipe at 32² both estimators' whole frames are 1.7–5.2 ms, mostly fixed cost, and `key`'s
     // filter pass for the rough lobes costs more than the margin, so the count follows the frames'
-    // noise; at 256² only studio's `painted-aniso` misses, by time (docs/performance.md, Error
-    // against GPU time).
+    // noise (the paper scenes' too); at 256² every quick scene holds it (docs/performance.md,
+    // Error against GPU time).
     let painted: Vec<_> = rows.iter().filter(|r| r.material.starts_with("painted")).cloned().collect();
     assert_eq!(painted.len(), plan.envs.len() * 2 * 4 * plan.spps.len(), "two painted materials");
     let (within, scenes) = error_vs_time::goal_count(&painted, |r| r.ms_median);

@@ -257,7 +257,7 @@ impl Renderer {
                     // (the allowance of the key and wide lights together, which counts the wide
                     // lights' share of the pixels in reach, is smaller: it would hold the quick
                     // sweep's painted streak, α 0.33 × 0.02 on studio, to 64 points, where the lamp
-                    // alone takes 124).
+                    // alone takes 124 as round tiles; its strips take 36).
                     let wide_points = |w: &&GpuWideLights| {
                         self.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, settings.spp)
                     };

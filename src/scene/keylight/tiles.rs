@@ -17,7 +17,9 @@
 //! split; a tile of a single texel is cut into its quarters (the map is read texel by texel: the
 //! radiance is constant over a texel). A lobe whose tiles would take more points than it may
 //! ([`max_points`]) gets none (`None`: it keeps MIS).
-//! `tests/keylight.rs` checks the bias against the exact integral over the texels.
+//! `tests/keylight.rs` checks the bias against the exact integral over the texels. A streak (a
+//! lobe much narrower along one axis than the light and wider than it along the other) may see
+//! the light as strips across its narrow axis instead ([`super::strips`]), in fewer points.
 //!
 //! Pure CPU, a few microseconds per lobe. The renderer makes a lobe's tiles once per map and keeps
 //! them with it (`render::environment::GpuKeyLights::tiles`, keyed by roughness, point budget and
