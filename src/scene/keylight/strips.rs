@@ -25,7 +25,7 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
-use super::tiles::{quarters, tile, LightTexel, Tile, TileSet, MAX_BLOCK_POINTS, TILE_BUDGET};
+use super::tiles::{quarters, refine, tile, LightTexel, Tile, TileSet, MAX_BLOCK_POINTS};
 use super::{KeyLight, QUADRATURE_RATIO};
 
 /// How many orientations each light is cut at, `π / ORIENTATIONS` apart (`lobe_lights.glsl`'s
@@ -121,26 +121,16 @@ fn split_across(region: &mut Vec<LightTexel>, t: &Tile, axis: DVec3) -> Option<(
 /// The strips of `light` across `axis` for a lobe of narrow roughness `alpha`, at most
 /// `max_strips` of them, or `None` when they do not fit.
 fn light_strips(light: &KeyLight, axis: DVec3, alpha: f64, max_strips: usize) -> Option<Vec<Tile>> {
-    let mut region = light.region.clone();
-    if region.is_empty() || max_strips == 0 {
+    if max_strips == 0 {
         return None;
     }
-    let net: f64 = region.iter().map(|t| t.weight).sum();
-    let budget = TILE_BUDGET * net.abs() * (QUADRATURE_RATIO * alpha).powi(4);
-    let mut strips = vec![strip(&region, (0..region.len()).collect(), axis)];
-    loop {
-        let total: f64 = strips.iter().map(|t| t.moment).sum();
-        if total <= budget {
-            return Some(strips);
-        }
-        if strips.len() >= max_strips {
-            return None;
-        }
-        let worst = (0..strips.len()).max_by(|&a, &b| strips[a].moment.total_cmp(&strips[b].moment))?;
-        let (a, b) = split_across(&mut region, &strips[worst], axis)?;
-        strips[worst] = a;
-        strips.push(b);
-    }
+    refine(
+        light,
+        alpha,
+        max_strips,
+        |region, texels| strip(region, texels, axis),
+        |region, t| split_across(region, t, axis),
+    )
 }
 
 /// The strips of every light for a lobe of roughness `alpha_narrow` × `alpha_wide`: for each

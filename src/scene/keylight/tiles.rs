@@ -202,28 +202,41 @@ fn split(region: &mut Vec<LightTexel>, t: &Tile, e1: DVec3, e2: DVec3) -> Option
 /// The tiles of `light` for a lobe of roughness `alpha` ([`tile_alpha`]), at most `max_tiles` of them, or
 /// `None` when they do not fit.
 fn light_tiles(light: &KeyLight, alpha: f64, max_tiles: usize) -> Option<Vec<Tile>> {
+    let e1 = light.direction.any_orthonormal_vector();
+    let e2 = light.direction.cross(e1);
+    refine(light, alpha, max_tiles, tile, |region, t| split(region, t, e1, e2))
+}
+
+/// `light` cut into parts (`part` makes one of texels, `split` halves one) until the parts'
+/// moments sum to at most the bound for a lobe of roughness `alpha`, `TILE_BUDGET |W| (r α)⁴`, the
+/// part of the largest moment split first; at most `max_parts` of them, or `None` when they do not
+/// fit.
+pub(super) fn refine(
+    light: &KeyLight,
+    alpha: f64,
+    max_parts: usize,
+    part: impl Fn(&[LightTexel], Vec<usize>) -> Tile,
+    split: impl Fn(&mut Vec<LightTexel>, &Tile) -> Option<(Tile, Tile)>,
+) -> Option<Vec<Tile>> {
     let mut region = light.region.clone();
     if region.is_empty() {
         return None;
     }
-    let whole = tile(&region, (0..region.len()).collect());
     let net: f64 = region.iter().map(|t| t.weight).sum();
     let budget = TILE_BUDGET * net.abs() * (QUADRATURE_RATIO * alpha).powi(4);
-    let e1 = light.direction.any_orthonormal_vector();
-    let e2 = light.direction.cross(e1);
-    let mut tiles = vec![whole];
+    let mut parts = vec![part(&region, (0..region.len()).collect())];
     loop {
-        let total: f64 = tiles.iter().map(|t| t.moment).sum();
+        let total: f64 = parts.iter().map(|t| t.moment).sum();
         if total <= budget {
-            return Some(tiles);
+            return Some(parts);
         }
-        if tiles.len() >= max_tiles {
+        if parts.len() >= max_parts {
             return None;
         }
-        let worst = (0..tiles.len()).max_by(|&a, &b| tiles[a].moment.total_cmp(&tiles[b].moment))?;
-        let (a, b) = split(&mut region, &tiles[worst], e1, e2)?;
-        tiles[worst] = a;
-        tiles.push(b);
+        let worst = (0..parts.len()).max_by(|&a, &b| parts[a].moment.total_cmp(&parts[b].moment))?;
+        let (a, b) = split(&mut region, &parts[worst])?;
+        parts[worst] = a;
+        parts.push(b);
     }
 }
 
