@@ -37,10 +37,12 @@ pub const WIDE_POINTS_RATIO: f64 = 2.0;
 /// larger one. The points are biased where the lobe is narrower than the light along an axis (the
 /// sweep's Ward 0.05 × 0.3 sees them as four short streaks there): at a few samples the BRDF
 /// samples they replace are noisier than that bias, at many they are not. Measured on the 64²
-/// sweep (2-core lavapipe, `report error-vs-time --maps studio.exr`), studio's two lobes narrow
-/// along one axis with the softbox as points / in their residual: Ward 0.05 × 0.3 16 spp
-/// 0.043 / 0.056, 32 spp 0.037 / 0.035; `painted-aniso` (its streak α 0.33 × 0.02 beside an α 0.36
-/// lobe) 16 spp 0.064 / 0.052, 32 spp 0.058 / 0.039.
+/// sweep (2-core lavapipe, `report error-vs-time --maps studio.exr --materials
+/// aniso-ward,painted-aniso`, this constant at 64 and at 16 for the other choice), studio's two
+/// lobes narrow along one axis with the softbox as points / in their residual: Ward 0.05 × 0.3
+/// 16 spp 0.042 / 0.055, 32 spp 0.036 / 0.034; `painted-aniso` (its streak α 0.33 × 0.02, the lamp
+/// as strips, beside an α 0.36 lobe) 16 spp 0.054 / 0.042, 32 spp 0.049 / 0.029. The streak would
+/// do better with 16; the Ward lobe, whose points take more noise at 16 spp, sets 32.
 pub const WIDE_POINTS_BY_SMALLER_ALPHA_SPP: u32 = 32;
 
 /// Whether a lobe that does not see the key and wide lights as tiles together (frames of fewer than
