@@ -219,6 +219,7 @@ impl Renderer {
                 let whole = key_lights.is_some_and(|k| fits(&k.lights));
                 // The tiles a lobe may take count on its reach test (`tiles::max_points`); the same
                 // tiles with the test off give the same image (a test compares).
+                let base = lobe::Variant::of(material, l, prefilter);
                 let pays = lights && lobe::reach_test_pays(material, l);
                 let reach = pays.then(|| lobe::reach_half_angles(material.normalization, l));
                 let reach_test = self.light_reach_test && pays;
@@ -230,9 +231,8 @@ impl Renderer {
                     // Round tiles, or for an anisotropic lobe of one component strips across its
                     // narrow axis (`keylight::strips`), whichever runs fewer points a pixel.
                     let round = Cut::Tiles(tile_alpha(l.alpha_x, l.alpha_y));
-                    let v = lobe::Variant::of(material, l, prefilter);
                     let (narrow, broad) = (l.alpha_x.min(l.alpha_y), l.alpha_x.max(l.alpha_y));
-                    let streak = (self.light_strips && !(v.split || v.sym) && narrow < broad)
+                    let streak = (self.light_strips && !(base.split || base.sym) && narrow < broad)
                         .then_some(Cut::Strips(narrow, broad));
                     let cut = |budget: usize, which: TileLights| match (
                         k.tiles(round, budget, which),
@@ -293,7 +293,7 @@ impl Renderer {
                     reach: tests_reach,
                     light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
                     oriented: tile_set.as_ref().map_or(0, |t| t.oriented as u8),
-                    ..lobe::Variant::of(material, l, prefilter)
+                    ..base
                 };
                 (i as u32, variant, tile_set)
             })

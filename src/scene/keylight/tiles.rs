@@ -285,7 +285,14 @@ impl TileSet {
 
     /// How many points a pixel runs ([`TileSet::rows_seen`]).
     pub fn points_seen(&self) -> usize {
-        self.rows_seen(|_| 0).len()
+        let mut start = 0;
+        let mut seen = 0;
+        for (k, &end) in self.ends.iter().enumerate() {
+            let rows = end - start;
+            seen += if k < self.oriented { rows / super::strips::ORIENTATIONS } else { rows };
+            start = end;
+        }
+        seen
     }
 }
 
