@@ -102,37 +102,89 @@ pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
 }
 
 /// [`read_limited`] for a file that must be a regular file: anything else (a FIFO, a device,
-/// `/dev/stdin`, a socket) is refused before it is opened, and the file is opened without blocking
-/// (`O_NONBLOCK`) and without following a symlink at its last component (`O_NOFOLLOW`) and checked
-/// again once open, so a file swapped for a FIFO in between cannot make the read wait forever.
-/// For the files a file refers to (a glTF file's buffers); the files a user names are read with
-/// [`read_limited`]. The error says what is wrong without naming the path (the caller names it).
-pub fn read_regular_limited(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, String> {
+/// `/dev/stdin`, a socket, a symbolic link) is refused before it is opened, and the file is opened
+/// without blocking (`O_NONBLOCK`) and without following a symlink at its last component
+/// (`O_NOFOLLOW`) and checked again once open, so a file swapped for a FIFO or a link in between
+/// cannot make the read wait forever or read elsewhere. The size is checked before anything is read.
+/// The one way to read the files a file refers to (a glTF file's buffers) and the files the program
+/// keeps for itself (the pipeline cache, the editor's recovery file, the report's cached
+/// references); the files a user names are read with [`read_limited`]. The error says what is wrong
+/// without naming the path (the caller names it); [`Unreadable::Missing`] tells a file that is not
+/// there from one that is there but not readable.
+pub fn read_regular_limited(path: &Path, limit: u64) -> std::result::Result<Vec<u8>, Unreadable> {
     use std::os::unix::fs::OpenOptionsExt;
-    let not_regular = "is not a regular file (a FIFO, device or socket)".to_string();
-    let meta = std::fs::metadata(path).map_err(|e| e.kind().to_string())?;
+    let io = |e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::NotFound => Unreadable::Missing,
+        _ => Unreadable::Refused(e.kind().to_string()),
+    };
+    let not_regular = || Unreadable::Refused("is not a regular file (a FIFO, device, socket or link)".into());
+    let meta = std::fs::symlink_metadata(path).map_err(io)?;
     if !meta.is_file() {
-        return Err(not_regular);
+        return Err(not_regular());
     }
     let file = std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW)
         .open(path)
-        .map_err(|e| e.kind().to_string())?;
-    let meta = file.metadata().map_err(|e| e.kind().to_string())?;
+        .map_err(|e| if e.raw_os_error() == Some(libc::ELOOP) { not_regular() } else { io(e) })?;
+    let meta = file.metadata().map_err(io)?;
     if !meta.is_file() {
-        return Err(not_regular);
+        return Err(not_regular());
     }
-    let too_big = |len: u64| format!("{len} bytes or more is larger than the limit ({limit} bytes)");
+    let too_big =
+        |len: u64| Unreadable::Refused(format!("{len} bytes or more is larger than the limit ({limit} bytes)"));
     if meta.len() > limit {
         return Err(too_big(meta.len()));
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(|e| e.kind().to_string())?;
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
     if bytes.len() as u64 > limit {
         return Err(too_big(bytes.len() as u64));
     }
     Ok(bytes)
+}
+
+/// Why [`read_regular_limited`] read nothing.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Unreadable {
+    /// Nothing is at the path.
+    Missing,
+    /// Something is there that is not read: what is wrong with it.
+    Refused(String),
+}
+
+impl std::fmt::Display for Unreadable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unreadable::Missing => f.write_str("no such file"),
+            Unreadable::Refused(why) => f.write_str(why),
+        }
+    }
+}
+
+/// The XDG Base Directory variables whose relative values [`ignore_relative_xdg`] removes.
+pub const XDG_VARS: [&str; 4] = ["XDG_CACHE_HOME", "XDG_STATE_HOME", "XDG_CONFIG_HOME", "XDG_DATA_HOME"];
+
+/// Removes from this process's environment each XDG Base Directory variable that is set to a
+/// relative path (the specification calls such a value invalid, to be ignored). Called first in
+/// `main`, before any thread starts: the libraries loaded in-process read these variables too (Mesa
+/// keeps its shader cache and the validation layer its own cache under `XDG_CACHE_HOME`), and with
+/// a relative value they would write into the current folder.
+pub fn ignore_relative_xdg() {
+    for var in XDG_VARS {
+        if std::env::var_os(var).is_some_and(|v| !std::path::Path::new(&v).is_absolute()) {
+            std::env::remove_var(var);
+        }
+    }
+}
+
+/// A per-user folder of the XDG Base Directory specification: `$VAR` where it is an absolute path,
+/// else `$HOME/fallback` where `HOME` is absolute (`~/.cache`, `~/.local/state`); `None` when
+/// neither is. The specification calls a relative value invalid and says to ignore it, so a
+/// relative `XDG_CACHE_HOME` never makes the program write into the current folder.
+pub fn user_dir(var: &str, fallback: &str) -> Option<std::path::PathBuf> {
+    let absolute = |k: &str| std::env::var_os(k).map(std::path::PathBuf::from).filter(|p| p.is_absolute());
+    absolute(var).or_else(|| absolute("HOME").map(|h| h.join(fallback)))
 }
 
 /// [`read_limited`] as UTF-8 text.
@@ -226,6 +278,11 @@ pub fn check_outputs(outputs: &[(&str, &Path)]) -> Result<()> {
     for (flag, path) in outputs {
         check_output(flag, path)?;
     }
+    check_distinct(outputs)
+}
+
+/// Refuses two outputs that name the same file (compared by [`same_file`]), naming both flags.
+pub fn check_distinct(outputs: &[(&str, &Path)]) -> Result<()> {
     for (k, (flag_b, b)) in outputs.iter().enumerate() {
         if let Some((flag_a, _)) = outputs[..k].iter().find(|(_, a)| same_file(a, b)) {
             return Err(Error::input(*flag_b, format!("{}: names the same file as {flag_a}", show(b))));

@@ -11,6 +11,7 @@ mod cli;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    brdf_shop::fsio::ignore_relative_xdg();
     let cli = match cli::parse() {
         Ok(cli) => cli,
         Err(code) => return code,

@@ -196,7 +196,7 @@ enum Report {
         materials: Vec<String>,
         /// The images' side in pixels, 8 to 1024 (default 64; with --quick 32). The CPU references
         /// cost the square of it.
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         size: Option<u32>,
     },
     /// NaN/Inf counts, GPU f32 against CPU f64 and maximum albedo over stiff and extreme inputs.

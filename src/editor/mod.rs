@@ -220,12 +220,10 @@ impl App {
         if self.opts.minimise {
             self.window_script.extend([WindowStep::Minimise(true), WindowStep::Minimise(false)]);
         }
-        state.recovered = self.recovered_material();
-        if state.recovered.is_some() {
-            state.status = format!(
-                "unsaved work from the last session found ({}): press R to restore it",
-                recovery_path().display()
-            );
+        state.recovered = self.recovered_material().ok().flatten();
+        if let (Some(_), Some(path)) = (&state.recovered, recovery_path()) {
+            state.status =
+                format!("unsaved work from the last session found ({}): press R to restore it", path.display());
         }
         self.state = Some(state);
         self.gpu = Some(gpu);
@@ -233,12 +231,13 @@ impl App {
     }
 
     /// The recovery file's material when it should be offered back: no `--material`, no replay,
-    /// and different from the one the session starts with.
-    fn recovered_material(&self) -> Option<Material> {
-        let recovery = recovery_path();
+    /// and different from the one the session starts with. An error says why a file at the recovery
+    /// path is not offered (it is not a regular file, or not a material).
+    fn recovered_material(&self) -> std::result::Result<Option<Material>, String> {
+        let Some(recovery) = recovery_path() else { return Ok(None) };
         match (&self.opts.material, &self.replay) {
-            (None, None) if recovery.exists() => Material::load(&recovery).ok().filter(|m| *m != self.start),
-            _ => None,
+            (None, None) => Ok(recovery::load_recovery(&recovery)?.filter(|m| *m != self.start)),
+            _ => Ok(None),
         }
     }
 
@@ -451,13 +450,20 @@ pub fn run(opts: Options) -> Result<()> {
             Error::input("--resize", format!("{w}x{h}: each side must be within 1 and {MAX_WINDOW_SIDE} pixels"))
         })?;
     }
-    // Each output a different file (however spelled), all refused before the window opens.
+    // Each output a different file (however spelled), all refused before the window opens. The
+    // exports take part in the same-file check; whether an export's folder takes a file is found
+    // when it is written (a status line: the session goes on).
     let outputs: Vec<(&str, &Path)> =
         [("--out", &opts.out), ("--screenshot", &opts.screenshot), ("--frame-stats", &opts.frame_stats)]
             .into_iter()
             .filter_map(|(flag, p)| p.as_deref().map(|p| (flag, p)))
             .collect();
     crate::fsio::check_outputs(&outputs)?;
+    let exports: Vec<(String, &Path)> =
+        opts.export.iter().map(|(f, p)| (format!("--export {}", f.name()), p.as_path())).collect();
+    let all: Vec<(&str, &Path)> =
+        outputs.iter().copied().chain(exports.iter().map(|(flag, p)| (flag.as_str(), *p))).collect();
+    crate::fsio::check_distinct(&all)?;
     let env = match &opts.env {
         Some(p) => Environment::load(p)?,
         None => crate::measure::embedded_environment()?,
@@ -516,11 +522,13 @@ pub fn run(opts: Options) -> Result<()> {
         dialog: None,
         export_dialog,
     };
-    if app.recovered_material().is_some() {
-        eprintln!(
-            "brdf-shop: unsaved work from the last session is in {}; press R in the window to restore it",
-            recovery_path().display()
-        );
+    let recovery = recovery_path().map(|p| crate::fsio::show(&p)).unwrap_or_default();
+    match app.recovered_material() {
+        Ok(Some(_)) => eprintln!(
+            "brdf-shop: unsaved work from the last session is in {recovery}; press R in the window to restore it"
+        ),
+        Ok(None) => {}
+        Err(why) => eprintln!("brdf-shop: warning: the recovery file {recovery} is ignored: {why}"),
     }
     event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
     if let Some(e) = app.error.take() {

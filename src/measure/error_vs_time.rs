@@ -5,7 +5,7 @@
 //! taken in rounds that interleave a scene's estimators and sample counts) and its error against the
 //! converged CPU reference
 //! (relative L1, RMSE and maximum absolute error over the object). References are cached on disk,
-//! keyed by a hash of everything they depend on. Writes `error-vs-time.csv`, `error-vs-time.png`
+//! keyed by a hash of everything they depend on (`reference_cache`). Writes `error-vs-time.csv`, `error-vs-time.png`
 //! (log–log: the error–time frontier of each estimator) and `error-vs-time.md` (the default `key`
 //! estimator's error at `fis`-8's GPU time, its equal-error speed-ups and time to 2 %, the maps'
 //! key-light decisions, and what a timed pass costs before any work on the device, measured after
@@ -14,15 +14,14 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::brdf::Material;
 use crate::error::{Error, Result};
-use crate::fsio::write_atomic;
 use crate::reference::{self, Image};
 use crate::render::peak::FixedCosts;
-use crate::render::{environment, Estimator, Renderer, Settings, View};
-use crate::scene::{Camera, Environment, Mesh};
+use crate::render::{Estimator, Renderer, Settings, View};
+use crate::scene::{Camera, Mesh};
 
 use super::plot::{loglog_png, Series};
+use super::reference_cache::cached_reference;
 
 /// What a run covers.
 #[derive(Clone, Debug)]
@@ -145,76 +144,6 @@ pub fn errors(a: &Image, b: &Image) -> (f64, f64, f64) {
         }
     }
     (rel, if n > 0 { (sq / n as f64).sqrt() } else { f64::NAN }, max)
-}
-
-fn fnv(h: &mut u64, bytes: &[u8]) {
-    for b in bytes {
-        *h = (*h ^ *b as u64).wrapping_mul(0x100000001b3);
-    }
-}
-
-/// The cache key of a reference image.
-pub fn reference_key(m: &Material, env: &Environment, mesh: &Mesh, camera: &Camera, size: u32, spp: u32) -> String {
-    let mut h: u64 = 0xcbf29ce484222325;
-    fnv(&mut h, b"brdf-shop reference v1");
-    fnv(&mut h, m.to_json().as_bytes());
-    fnv(&mut h, format!("{:?}", environment::key(env)).as_bytes());
-    fnv(
-        &mut h,
-        format!("{} {} {} {:?} {size} {spp}", mesh.name, mesh.positions.len(), mesh.indices.len(), camera).as_bytes(),
-    );
-    format!("{h:016x}")
-}
-
-const MAGIC: &[u8; 8] = b"BRDFREF1";
-
-fn save_image(path: &Path, im: &Image) -> Result<()> {
-    let mut bytes = MAGIC.to_vec();
-    bytes.extend_from_slice(&im.width.to_le_bytes());
-    bytes.extend_from_slice(&im.height.to_le_bytes());
-    for p in &im.pixels {
-        for v in p {
-            bytes.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    write_atomic(path, &bytes)
-}
-
-fn load_image(path: &Path) -> Option<Image> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() < 16 || &bytes[..8] != MAGIC {
-        return None;
-    }
-    let w = u32::from_le_bytes(bytes[8..12].try_into().ok()?);
-    let h = u32::from_le_bytes(bytes[12..16].try_into().ok()?);
-    let body = &bytes[16..];
-    if body.len() != w as usize * h as usize * 16 {
-        return None;
-    }
-    let f: Vec<f32> = body.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-    Some(Image { width: w, height: h, pixels: f.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect() })
-}
-
-/// The reference for a scene, from the cache in `cache` or computed (and cached).
-pub fn cached_reference(
-    cache: &Path,
-    m: &Material,
-    env: &Environment,
-    mesh: &Mesh,
-    camera: &Camera,
-    size: u32,
-    spp: u32,
-) -> Result<Image> {
-    let path = cache.join(format!("ref-{}.bin", reference_key(m, env, mesh, camera, size, spp)));
-    if let Some(im) = load_image(&path) {
-        if im.width == size && im.height == size {
-            return Ok(im);
-        }
-    }
-    let im = reference::render_mesh(m, env, mesh, camera, size, size, spp, false);
-    std::fs::create_dir_all(cache).map_err(|e| Error::io(cache, e))?;
-    save_image(&path, &im)?;
-    Ok(im)
 }
 
 /// Frames over which the summary's fixed costs of a timed pass are measured (after the sweep).

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod control;
 pub mod error_vs_time;
 pub mod plot;
+pub mod reference_cache;
 pub mod stability;
 pub mod viewer;
 

@@ -1,11 +1,12 @@
 //! The `VkPipelineCache` every pipeline is built through, kept between runs in a file of the user's
-//! cache folder (`$XDG_CACHE_HOME/brdf-shop/pipelines.bin`, else `~/.cache/brdf-shop/pipelines.bin`),
-//! so that a second run (the editor's cold start, a bench) skips the driver's compiles.
+//! cache folder (`$XDG_CACHE_HOME/brdf-shop/pipelines.bin`, else `~/.cache/brdf-shop/pipelines.bin`;
+//! a relative `XDG_CACHE_HOME` is ignored, [`crate::fsio::user_dir`]), so that a second run (the editor's cold start, a bench) skips the driver's compiles.
 //! `BRDF_SHOP_PIPELINE_CACHE=0` turns it off.
 //!
 //! The file is what `vkGetPipelineCacheData` returns. A file whose header does not name this device
 //! (vendor, device id and `pipelineCacheUUID`, which changes with the driver), a damaged or
-//! oversized one, or one that cannot be read is ignored without a message: the cache starts empty and
+//! oversized one, one that is not a regular file (a FIFO, device, socket or link: read through
+//! [`crate::fsio::read_regular_limited`], which never blocks) or one that cannot be read is ignored without a message: the cache starts empty and
 //! the run builds its pipelines as without one. It is written atomically (`fsio::write_atomic`) when
 //! the context drops, only when its contents changed. Owns the cache handle; destroyed by
 //! `Context`'s drop before the device.
@@ -43,9 +44,7 @@ pub fn default_path() -> Option<PathBuf> {
     if std::env::var_os(ENV).is_some_and(|v| v == "0") {
         return None;
     }
-    let non_empty = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    let base = non_empty("XDG_CACHE_HOME").or_else(|| non_empty("HOME").map(|h| h.join(".cache")))?;
-    Some(base.join("brdf-shop").join("pipelines.bin"))
+    Some(crate::fsio::user_dir("XDG_CACHE_HOME", ".cache")?.join("brdf-shop").join("pipelines.bin"))
 }
 
 /// Whether `bytes` start with a version-one header naming `device`'s vendor, device and cache UUID.
@@ -74,8 +73,9 @@ impl PipelineCache {
     /// A cache started from the file at `path` where the file is this device's, else empty; saved
     /// there by [`PipelineCache::save`]. Never fails: a cache that cannot be created is null.
     pub fn open(device: &Device, path: &Path) -> PipelineCache {
-        let bytes =
-            crate::fsio::read_limited(path, MAX_BYTES, "a pipeline cache").ok().filter(|b| header_matches(b, device));
+        // A cache that is missing, not a regular file (a FIFO is never opened for reading), too
+        // large or another device's is ignored: the cache only saves time.
+        let bytes = crate::fsio::read_regular_limited(path, MAX_BYTES).ok().filter(|b| header_matches(b, device));
         let mut cache = PipelineCache { raw: vk::PipelineCache::null(), path: Some(path.to_path_buf()), loaded: None };
         if let Some(b) = bytes {
             if let Ok(raw) = create(device, &b) {
