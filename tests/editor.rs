@@ -432,3 +432,31 @@ fn minimise_without_a_window_manager_is_one_line_and_the_session_goes_on() {
     assert_eq!(doc["skipped_minimised"], 0);
     assert_eq!(image::open(d("shot.png")).unwrap().to_rgba8().dimensions(), (200, 120));
 }
+
+/// The layout fills the window at every size (panel, mesh view and the canvas column side by side,
+/// no strip left over), and the orbit camera frames the mesh in the mesh view's narrower extent
+/// after every resize; `F` brings the zoom back to that framing.
+#[test]
+fn the_layout_fills_the_window_and_the_camera_frames_the_mesh() {
+    use brdf_shop::editor::state::{Input, Layout, State, FRAME_MARGIN};
+    use brdf_shop::scene::camera::fit_distance;
+    for (w, h) in [(1280, 720), (720, 1280), (1920, 800), (640, 480), (300, 2000), (2000, 300)] {
+        let l = Layout::new(w, h);
+        assert_eq!(l.mesh_x + l.mesh_w + l.canvas, w, "{w}x{h}: {l:?}");
+        assert_eq!(l.canvas_x, l.mesh_x + l.mesh_w);
+        assert!(l.canvas <= h * 3 / 5 && l.canvas <= l.mesh_w + 1, "{w}x{h}: {l:?}");
+    }
+    let settings = brdf_shop::brush::strokes::default_strokes().unwrap().settings("test").unwrap();
+    let mut s = State::new(Material::scratch(), settings, Layout::new(1280, 720));
+    let framed =
+        |s: &State| fit_distance(s.fov_deg, s.layout.mesh_w as f64 / s.layout.height as f64, 1.0, FRAME_MARGIN);
+    assert!((s.distance - framed(&s)).abs() < 1e-12);
+    s.handle(Input::Resized(720, 1280));
+    assert!((s.distance - framed(&s)).abs() < 1e-12 && s.distance > 6.0, "{}", s.distance);
+    let (mx, my) = (s.layout.mesh_x as f64 + 10.0, 10.0);
+    s.handle(Input::CursorMoved(mx, my));
+    s.handle(Input::Scroll(2.0));
+    assert!(s.distance < framed(&s) * 0.9, "the wheel zooms in: {}", s.distance);
+    s.handle(Input::FrameView);
+    assert!((s.distance - framed(&s)).abs() < 1e-12 && s.zoom == 1.0);
+}

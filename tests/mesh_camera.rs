@@ -391,3 +391,52 @@ fn view_proj_puts_ray_points_at_their_pixels() {
     }
     eprintln!("worst NDC error of view_proj against ray at view depth >= 0.5: {worst:.2e}");
 }
+
+/// The largest |x| and |y| in normalised device coordinates of the unit sphere's silhouette seen by
+/// `c` in a `w × h` image (points on the sphere, 64 × 128 of them, projected by `view_proj`).
+fn sphere_extent(c: &Camera, w: u32, h: u32) -> (f64, f64) {
+    let vp = c.view_proj(w, h);
+    let mut ext: (f64, f64) = (0.0, 0.0);
+    for i in 0..=64 {
+        let t = PI * i as f64 / 64.0;
+        for j in 0..128 {
+            let p = 2.0 * PI * j as f64 / 128.0;
+            let q = vp * glam::Vec4::new((t.sin() * p.cos()) as f32, t.cos() as f32, (t.sin() * p.sin()) as f32, 1.0);
+            ext = (ext.0.max((q.x / q.w).abs() as f64), ext.1.max((q.y / q.w).abs() as f64));
+        }
+    }
+    ext
+}
+
+/// `render`'s default camera frames the unit sphere (which every mesh is scaled into) at every
+/// aspect: a square or wider image keeps the default camera, and a taller one moves the eye back
+/// until the sphere keeps the square image's margin to the left and right edges. `fit_distance`
+/// puts a sphere's silhouette tangent to the nearer edges. Sampled silhouettes lie inside the
+/// exact one, so the extents are compared to 1e-3 (the 64 × 128 points miss the tangent point by
+/// at most 1 − cos(π/64) ≈ 1.2e-3 of the radius).
+#[test]
+fn the_default_camera_frames_the_unit_sphere_at_every_aspect() {
+    use brdf_shop::scene::camera::fit_distance;
+    assert_eq!(Camera::framed(256, 256), Camera::default());
+    assert_eq!(Camera::framed(512, 256), Camera::default());
+    // The exact extent, in NDC, of a unit sphere grown by `m` touching the edges of half-angle `a`.
+    let exact = |a: f64, m: f64| (a.sin() / m).asin().tan() / a.tan();
+    let (half_v, m) = (15f64.to_radians(), 4.0 * 15f64.to_radians().sin());
+    let (_, y) = sphere_extent(&Camera::default(), 256, 256);
+    assert!((y - exact(half_v, m)).abs() < 1e-3, "square: {y}");
+    for (w, h) in [(256, 512), (100, 720), (720, 1280), (1, 1000)] {
+        let (x, y) = sphere_extent(&Camera::framed(w, h), w, h);
+        let half_h = (half_v.tan() * w as f64 / h as f64).atan();
+        assert!((x - exact(half_h, m)).abs() < 1e-3 && x < 1.0 && y < x, "{w}x{h}: extent {x}, {y}");
+    }
+    for (w, h) in [(1280, 720), (720, 1280), (1920, 800), (400, 720)] {
+        let d = fit_distance(30.0, w as f64 / h as f64, 1.0, 1.25);
+        let c = Camera { eye: DVec3::new(0.0, 0.0, d), ..Camera::default() };
+        let (x, y) = sphere_extent(&c, w, h);
+        let half_h = (half_v.tan() * w as f64 / h as f64).atan();
+        let want = if half_h < half_v { (x, exact(half_h, 1.25)) } else { (y, exact(half_v, 1.25)) };
+        assert!((want.0 - want.1).abs() < 1e-3 && x.max(y) < 0.8, "{w}x{h}: {x}, {y}");
+    }
+    // A degenerate aspect counts as square.
+    assert_eq!(fit_distance(30.0, f64::NAN, 1.0, 1.0), fit_distance(30.0, 1.0, 1.0, 1.0));
+}

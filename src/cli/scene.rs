@@ -163,7 +163,7 @@ pub fn load(
     limits(width, height, spp)?;
     let camera = match &args.camera {
         Some(c) => Camera::parse(c).map_err(|e| Error::input("--camera", e))?,
-        None => Camera::default(),
+        None => Camera::framed(width, height),
     };
     let material = match &args.material {
         Some(p) => Material::load(p)?,

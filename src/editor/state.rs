@@ -70,9 +70,12 @@ pub struct Layout {
 impl Layout {
     pub fn new(width: u32, height: u32) -> Layout {
         let mesh_x = if width >= 3 * PANEL_WIDTH { PANEL_WIDTH } else { 0 };
-        let mesh_w = ((width - mesh_x) / 2).max(1);
+        // The right column is as wide as the canvas (at most half of what the panel leaves, at
+        // most 3/5 of the height: the graphs below it keep the rest); the mesh view takes all the
+        // width between the panel and that column, so no strip of the window is left unfilled.
+        let canvas = ((width - mesh_x) / 2).min(height * 3 / 5).max(1);
+        let mesh_w = (width - mesh_x).saturating_sub(canvas).max(1);
         let canvas_x = mesh_x + mesh_w;
-        let canvas = width.saturating_sub(canvas_x).min(height * 3 / 5).max(1);
         Layout { width, height, mesh_x, mesh_w, canvas_x, canvas, graph_y: canvas.min(height) }
     }
 
@@ -114,8 +117,13 @@ pub struct Effect {
 /// The orbit camera's starting elevation: the torus seen from a little above, as in the paper.
 pub const DEFAULT_PITCH: f64 = 0.45;
 
-/// The orbit camera's starting distance: the unit-sphere-fitted mesh fits the half-window view.
-pub const DEFAULT_DISTANCE: f64 = 4.8;
+/// The room the orbit camera leaves around the mesh at zoom 1: the unit sphere (every mesh is
+/// scaled into it) grown by this factor just fits the mesh view's narrower extent
+/// ([`crate::scene::camera::fit_distance`]), at every window size and aspect.
+pub const FRAME_MARGIN: f64 = 1.25;
+
+/// The closest and furthest the orbit camera comes to the mesh's centre (a zoom keeps within them).
+pub const DISTANCE_RANGE: (f64, f64) = (1.2, 50.0);
 
 enum Drag {
     None,
@@ -130,10 +138,13 @@ pub struct State {
     pub brush: BrushKind,
     pub lobe: Option<usize>,
     pub layout: Layout,
-    /// Orbit camera: yaw and pitch in radians, distance to the target.
+    /// Orbit camera: yaw and pitch in radians, distance to the target ([`State::refit`]: the
+    /// framing distance of the mesh view times `zoom`).
     pub yaw: f64,
     pub pitch: f64,
     pub distance: f64,
+    /// The wheel's zoom: 1 frames the mesh ([`FRAME_MARGIN`]); above 1 the camera is further out.
+    pub zoom: f64,
     pub fov_deg: f64,
     /// The light the canvas starts with (the environment's brightest direction seen by the camera).
     pub default_light: DVec3,
@@ -159,7 +170,7 @@ impl State {
 
     pub fn new(material: Material, settings: Settings, layout: Layout) -> State {
         let default_light = settings.canvas.light;
-        State {
+        let mut state = State {
             history: History::new(material),
             settings,
             brush: BrushKind::Create,
@@ -167,7 +178,8 @@ impl State {
             layout,
             yaw: 0.0,
             pitch: DEFAULT_PITCH,
-            distance: DEFAULT_DISTANCE,
+            distance: 0.0,
+            zoom: 1.0,
             fov_deg: 30.0,
             default_light,
             light_moved: false,
@@ -177,7 +189,19 @@ impl State {
             log_graph: false,
             exposure: 1.0,
             recovered: None,
-        }
+        };
+        state.refit();
+        state
+    }
+
+    /// Sets the orbit distance from the mesh view's aspect and the zoom: the mesh fits both extents
+    /// of the view at zoom 1, whatever the window's size.
+    pub fn refit(&mut self) {
+        let aspect = self.layout.mesh_w as f64 / self.layout.height.max(1) as f64;
+        let framed = crate::scene::camera::fit_distance(self.fov_deg, aspect, 1.0, FRAME_MARGIN);
+        let (near, far) = DISTANCE_RANGE;
+        self.zoom = self.zoom.clamp(near / framed, far / framed);
+        self.distance = framed * self.zoom;
     }
 
     pub fn material(&self) -> &Material {
@@ -252,7 +276,8 @@ impl State {
             }
             Input::Scroll(d) => {
                 if self.layout.in_mesh(self.cursor.0, self.cursor.1) {
-                    self.distance = (self.distance * (1.0 - 0.1 * d)).clamp(1.2, 50.0);
+                    self.zoom *= 1.0 - 0.1 * d;
+                    self.refit();
                     fx.redraw = true;
                 }
             }
@@ -281,12 +306,14 @@ impl State {
                 fx.redraw = true;
             }
             Input::FrameView => {
-                (self.yaw, self.pitch, self.distance) = (0.0, DEFAULT_PITCH, DEFAULT_DISTANCE);
+                (self.yaw, self.pitch, self.zoom) = (0.0, DEFAULT_PITCH, 1.0);
+                self.refit();
                 fx.redraw = true;
             }
             Input::Save => fx.save = true,
             Input::Resized(w, h) => {
                 self.layout = Layout::new(w.max(1), h.max(1));
+                self.refit();
                 fx.redraw = true;
             }
             Input::SaveAs(p) => fx.save_as = Some(p),

@@ -27,6 +27,35 @@ impl Default for Camera {
     }
 }
 
+/// The distance from a sphere's centre at which a camera of vertical field of view `fov_deg`
+/// looking at it, with an image `aspect` = width / height, sees the sphere of `radius` grown by the
+/// factor `margin` just touch the nearer pair of the image's edges: the sphere's silhouette (angular
+/// radius `asin(r / d)`) fits within both half-angles, the vertical `fov / 2` and the horizontal
+/// `atan(tan(fov / 2) · aspect)`. A degenerate aspect (zero, negative or not finite) counts as 1.
+pub fn fit_distance(fov_deg: f64, aspect: f64, radius: f64, margin: f64) -> f64 {
+    let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
+    let half_v = 0.5 * fov_deg.to_radians();
+    let half_h = (half_v.tan() * aspect).atan();
+    radius * margin / half_v.min(half_h).sin()
+}
+
+impl Camera {
+    /// The default camera for an image of `width × height`: [`Camera::default`] where the image is
+    /// at least as wide as it is tall; for a taller image the eye moves back along the same line
+    /// until the unit sphere (every mesh is scaled into it) keeps the same margin to the left and
+    /// right edges as the default camera keeps to the top and bottom of a square image.
+    pub fn framed(width: u32, height: u32) -> Camera {
+        let c = Camera::default();
+        if width >= height {
+            return c;
+        }
+        let d = c.eye.length();
+        let margin = d * (0.5 * c.fov_deg.to_radians()).sin();
+        let eye = c.eye * (fit_distance(c.fov_deg, width as f64 / height as f64, 1.0, margin) / d);
+        Camera { eye, ..c }
+    }
+}
+
 /// The near plane of [`Camera::view_proj`], also the smallest ray distance the CPU reference accepts.
 /// The far plane is at infinity: depth `1 − NEAR/z` never reaches the cleared 1.0, so no part of the
 /// scene is clipped however far the eye is. With `D32_SFLOAT` and the default camera (`z ≈ 4`) the
