@@ -1,5 +1,6 @@
 #version 460
-// Starts the accumulation image: the environment (level 0) behind the object with alpha 0, and
+// Starts the accumulation image: the environment (at the backdrop's mip level, `backdrop_lod`)
+// behind the object with alpha 0, and
 // (0, 0, 0, 1) on the object, where the shading passes add their terms.
 //
 // BLOCKS (a frame that rasterises and filters sparsely, `compact::Start::Later`): the image was
@@ -20,7 +21,7 @@ layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_
 layout(set = 0, binding = 1, rgba32f) writeonly uniform image2D accum;
 layout(set = 0, binding = 2) uniform sampler2D env_tex;
 
-vec4 background(ivec2 p) { return vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), 0.0).rgb, 0.0); }
+vec4 background(ivec2 p) { return vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), backdrop_lod()).rgb, 0.0); }
 
 void main() {
     if (BLOCKS) {

@@ -91,7 +91,7 @@ void main() {
         if (LATER) off_object = off_object || (inside(p) && !object);
         if (!LATER && inside(p)) {
             vec4 acc = vec4(0.0, 0.0, 0.0, 1.0);
-            if (!object) acc = vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), 0.0).rgb, 0.0);
+            if (!object) acc = vec4(textureLod(env_tex, equirect_uv(camera_ray(p)), backdrop_lod()).rgb, 0.0);
             if (!LATER && diffuse && listed) acc.rgb += pc.fparams.rgb / PI * diffuse_irradiance(d, normal);
             imageStore(accum, p, acc);
         }

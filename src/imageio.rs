@@ -41,13 +41,26 @@ pub fn write(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure
 /// The bytes [`write`] writes, to be written later with other outputs
 /// ([`crate::fsio::write_all_atomic`]). Non-finite values are clamped as [`clamp_to_finite`] says.
 pub fn encode(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> Result<Vec<u8>> {
+    encode_view(path, width, height, pixels, exposure, exposure)
+}
+
+/// [`encode`] of a mesh view whose backdrop has its own brightness: a PNG scales the object's
+/// pixels (alpha ≥ ½) by `exposure` and the backdrop's (alpha < ½) by `backdrop_exposure`.
+pub fn encode_view(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+    exposure: f64,
+    backdrop_exposure: f64,
+) -> Result<Vec<u8>> {
     let origin = crate::fsio::show(path);
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = match ext.as_deref() {
         Some("exr") => {
             exr_bytes(width, height, pixels).map_err(|e| Error::input(&origin, format!("cannot encode EXR: {e}")))?
         }
-        Some("png") => png_bytes(width, height, pixels, exposure)
+        Some("png") => png_bytes(width, height, pixels, (exposure, backdrop_exposure))
             .map_err(|e| Error::input(&origin, format!("cannot encode PNG: {e}")))?,
         _ => return Err(Error::input(origin, "the output must end in .exr or .png")),
     };
@@ -77,9 +90,20 @@ fn exr_bytes(width: u32, height: u32, pixels: &[[f32; 4]]) -> std::result::Resul
     Ok(cursor.into_inner())
 }
 
-fn png_bytes(width: u32, height: u32, pixels: &[[f32; 4]], exposure: f64) -> image::ImageResult<Vec<u8>> {
+fn png_bytes(
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+    (object, backdrop): (f64, f64),
+) -> image::ImageResult<Vec<u8>> {
     use image::ImageEncoder;
-    let rgb: Vec<u8> = pixels.iter().flat_map(|p| [p[0], p[1], p[2]].map(|v| srgb8(v as f64, exposure))).collect();
+    let rgb: Vec<u8> = pixels
+        .iter()
+        .flat_map(|p| {
+            let exposure = if p[3] >= 0.5 { object } else { backdrop };
+            [p[0], p[1], p[2]].map(|v| srgb8(v as f64, exposure))
+        })
+        .collect();
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png).write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)?;
     Ok(png)

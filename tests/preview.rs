@@ -39,6 +39,7 @@ fn mesh_view(width: u32, height: u32) -> Settings {
         camera: Camera::default(),
         light: DVec3::new(0.3, 0.4, 0.866).normalize(),
         intensity: 1.0,
+        backdrop_blur: 0.0,
     }
 }
 

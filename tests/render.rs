@@ -47,6 +47,7 @@ fn settings(size: u32, spp: u32, estimator: Estimator) -> Settings {
         camera: Camera::default(),
         light: DVec3::new(0.3, 0.4, 0.866).normalize(),
         intensity: 1.0,
+        backdrop_blur: 0.0,
     }
 }
 

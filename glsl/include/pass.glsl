@@ -37,6 +37,10 @@ vec3 camera_ray(ivec2 p) {
     return normalize(pc.forward.xyz + ndc.x * pc.right.xyz - ndc.y * pc.up.xyz);
 }
 
+// The mip level of the environment the mesh view's backdrop shows (`Settings::backdrop_blur`): 0
+// the map itself. It travels in the forward vector's unused fourth component.
+float backdrop_lod() { return pc.forward.w; }
+
 bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
 
 // Whether a G-buffer texel N (`gbuffer_texel`: the normal, alpha 1 marking the object) holds the

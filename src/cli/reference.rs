@@ -20,8 +20,22 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
             let (env, mesh) =
                 (scene.env.as_ref().expect("loaded for mesh views"), scene.mesh.as_ref().expect("loaded"));
             let stop = brdf_shop::interrupt::requested;
-            reference::render_mesh_watched(&scene.material, env, mesh, &s.camera, s.width, s.height, s.spp, true, &stop)
-                .ok_or(brdf_shop::interrupt::Interrupted)?
+            let mut image = reference::render_mesh_watched(
+                &scene.material,
+                env,
+                mesh,
+                &s.camera,
+                s.width,
+                s.height,
+                s.spp,
+                true,
+                &stop,
+            )
+            .ok_or(brdf_shop::interrupt::Interrupted)?;
+            if s.backdrop_blur > 0.0 {
+                blur_backdrop(&mut image, env, &s.camera, s.backdrop_blur);
+            }
+            image
         }
         View::Canvas => {
             let canvas = Canvas { light: s.light, intensity: s.intensity };
@@ -41,4 +55,22 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         brdf_shop::fsio::show(&args.out)
     );
     Ok(())
+}
+
+/// The backdrop (the pixels off the object, alpha 0) at mip level `lod` of the map, as the GPU's
+/// backdrop reads it ([`brdf_shop::scene::Environment::lookup_chain`]).
+fn blur_backdrop(
+    image: &mut reference::Image,
+    env: &brdf_shop::scene::Environment,
+    camera: &brdf_shop::scene::Camera,
+    lod: f64,
+) {
+    let chain = env.mip_chain();
+    let rays = brdf_shop::scene::camera::Rays::new(camera, image.width, image.height);
+    let w = image.width as usize;
+    for (k, p) in image.pixels.iter_mut().enumerate().filter(|(_, p)| p[3] < 0.5) {
+        let dir = rays.at((k % w) as f64 + 0.5, (k / w) as f64 + 0.5);
+        let l = brdf_shop::scene::Environment::lookup_chain(&chain, dir, lod);
+        *p = [l.x as f32, l.y as f32, l.z as f32, p[3]];
+    }
 }

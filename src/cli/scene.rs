@@ -26,6 +26,13 @@ pub enum EstimatorArg {
     Mis,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BackgroundArg {
+    /// The environment map, at `--backdrop-brightness` and `--backdrop-blur`.
+    Env,
+    Black,
+}
+
 #[derive(clap::Args, Clone, Debug)]
 pub struct SceneArgs {
     /// The material (*.brdf.json); default: the embedded default strokes painted on the scratch material.
@@ -34,6 +41,10 @@ pub struct SceneArgs {
     /// Environment map (.exr or .hdr, equirectangular); required for mesh views.
     #[arg(long)]
     pub env: Option<PathBuf>,
+    /// Turn the environment by DEG degrees about the up axis (+y, counter-clockwise seen from
+    /// above): the lighting, the key lights and the backdrop together.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub env_rotation: f64,
     /// `sphere`, `torus` or a mesh file: OBJ, glTF 2.0 (.gltf, .glb) or PLY.
     #[arg(long, default_value = "sphere")]
     pub mesh: String,
@@ -62,6 +73,17 @@ pub struct SceneArgs {
     /// Linear scale before the sRGB curve (PNG output): a finite number > 0.
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub exposure: f64,
+    /// What the mesh view shows behind the object: the environment (`env`) or black.
+    #[arg(long, value_enum, default_value_t = BackgroundArg::Env)]
+    pub background: BackgroundArg,
+    /// The backdrop's own linear scale, independent of the object's exposure (the image's backdrop
+    /// pixels are the map's radiance times this); default: the exposure.
+    #[arg(long, value_name = "B", allow_hyphen_values = true)]
+    pub backdrop_brightness: Option<f64>,
+    /// The backdrop's blur: the level of the environment's mip chain it shows (0 the map itself,
+    /// each level halves the resolution; fractional levels blend two).
+    #[arg(long, value_name = "LEVEL", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub backdrop_blur: f64,
     /// Output image: .exr (linear) or .png.
     #[arg(long)]
     pub out: PathBuf,
@@ -76,6 +98,8 @@ pub struct Scene {
     pub env: Option<Environment>,
     pub mesh: Option<Mesh>,
     pub settings: Settings,
+    /// The backdrop's linear scale ([`backdrop_brightness`]); `None`: the exposure's.
+    pub backdrop: Option<f64>,
 }
 
 pub fn parse_size(s: &str) -> Result<(u32, u32), Error> {
@@ -173,7 +197,21 @@ pub fn load(
         ViewArg::Mesh => View::Mesh,
         ViewArg::Canvas => View::Canvas,
     };
+    let backdrop = backdrop_brightness(args)?;
+    if !(args.backdrop_blur.is_finite() && args.backdrop_blur >= 0.0) {
+        return Err(Error::input(
+            "--backdrop-blur",
+            format!("{} is not a mip level (a finite number ≥ 0)", args.backdrop_blur),
+        )
+        .into());
+    }
+    if !args.env_rotation.is_finite() {
+        return Err(
+            Error::input("--env-rotation", format!("{} is not a finite number of degrees", args.env_rotation)).into()
+        );
+    }
     let env = match &args.env {
+        Some(p) if args.env_rotation != 0.0 => Some(load_env(p)?.rotated(args.env_rotation)),
         Some(p) => Some(load_env(p)?),
         None if view == View::Mesh => {
             return Err(Error::input("--env", "a mesh view needs an environment map (.exr or .hdr)").into())
@@ -185,8 +223,31 @@ pub fn load(
         View::Canvas => None,
     };
     let light = canvas_light(args, env.as_ref(), &camera)?;
-    let settings = Settings { width, height, spp, estimator, view, camera, light, intensity: 1.0 };
-    Ok(Scene { material, env, mesh, settings })
+    let settings = Settings {
+        width,
+        height,
+        spp,
+        estimator,
+        view,
+        camera,
+        light,
+        intensity: 1.0,
+        backdrop_blur: args.backdrop_blur,
+    };
+    Ok(Scene { material, env, mesh, settings, backdrop })
+}
+
+/// The backdrop's linear scale: 0 for `--background black`, else `--backdrop-brightness` (a finite
+/// number ≥ 0); `None` (the default) draws it as the object is drawn, at the exposure.
+fn backdrop_brightness(args: &SceneArgs) -> Result<Option<f64>, Error> {
+    match (args.background, args.backdrop_brightness) {
+        (BackgroundArg::Black, _) => Ok(Some(0.0)),
+        (BackgroundArg::Env, None) => Ok(None),
+        (BackgroundArg::Env, Some(b)) if b.is_finite() && b >= 0.0 => Ok(Some(b)),
+        (BackgroundArg::Env, Some(b)) => {
+            Err(Error::input("--backdrop-brightness", format!("{b} is not a finite number ≥ 0")))
+        }
+    }
 }
 
 /// Loads an environment map.
@@ -222,8 +283,20 @@ pub fn write_outputs(
     frame_ms: f64,
     key_lights: Option<serde_json::Value>,
 ) -> anyhow::Result<()> {
+    // The backdrop (alpha 0) at its own brightness: the image holds the map's radiance times it, and
+    // a PNG shows it as it is, the object at the exposure.
+    let backdrop = scene.backdrop.filter(|_| scene.settings.view == View::Mesh);
+    if let Some(b) = backdrop {
+        for p in image.pixels.iter_mut().filter(|p| p[3] < 0.5) {
+            for c in &mut p[..3] {
+                *c = (*c as f64 * b) as f32;
+            }
+        }
+    }
     let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
-    let bytes = brdf_shop::imageio::encode(&args.out, image.width, image.height, &image.pixels, args.exposure)?;
+    let backdrop_exposure = if backdrop.is_some() { 1.0 } else { args.exposure };
+    let (w, h) = (image.width, image.height);
+    let bytes = brdf_shop::imageio::encode_view(&args.out, w, h, &image.pixels, args.exposure, backdrop_exposure)?;
     let timings = args
         .timings
         .as_ref()

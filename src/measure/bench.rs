@@ -287,6 +287,7 @@ fn settings((w, h): (u32, u32), spp: u32) -> Settings {
         camera: Camera::default(),
         light: glam::DVec3::Z,
         intensity: 1.0,
+        backdrop_blur: 0.0,
     }
 }
 

@@ -208,6 +208,7 @@ fn sweep(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Re
                 camera: camera.clone(),
                 light: glam::DVec3::Z,
                 intensity: 1.0,
+                backdrop_blur: 0.0,
             };
             let mut images = Vec::with_capacity(configs.len());
             for &c in &configs {

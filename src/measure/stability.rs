@@ -209,6 +209,7 @@ fn scene_case(r: &mut Renderer, name: &str, env: &Environment) -> Result<Case> {
                 camera: Camera::default(),
                 light: env.brightest_direction(),
                 intensity: 3e4,
+                backdrop_blur: 0.0,
             };
             let im = r.render(&m, &s)?.image;
             values += 4 * im.pixels.len();

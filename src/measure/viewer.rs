@@ -106,6 +106,7 @@ fn frames_of(
             camera,
             light: glam::DVec3::new(0.3, 0.4, 0.866),
             intensity: 1.0,
+            backdrop_blur: 0.0,
         };
         let canvas = Settings { width: l.canvas, height: l.canvas, view: View::Canvas, ..mesh.clone() };
         let recorded =

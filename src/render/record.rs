@@ -78,6 +78,16 @@ impl Recording<'_> {
     }
 }
 
+/// The mip level the backdrop is read at: `blur` where it is a finite number ≥ 0, else 0 (the
+/// sampler clamps it to the chain's last level, the map's mean).
+fn backdrop_lod(blur: f64) -> f32 {
+    if blur.is_finite() && blur > 0.0 {
+        blur as f32
+    } else {
+        0.0
+    }
+}
+
 /// The camera's basis for `camera_ray` in `pass.glsl`.
 fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
     let forward = (camera.target - camera.eye).normalize();
@@ -410,6 +420,9 @@ impl Renderer {
         let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
         push.size = [w, h, ew, eh];
         push.light = gpu::vec4(settings.light, settings.intensity as f32);
+        // The backdrop's mip level (`backdrop_lod` in pass.glsl) travels in the forward vector's
+        // unused fourth component.
+        push.forward[3] = backdrop_lod(settings.backdrop_blur);
         let rec = Recording { ctx, cmd, pool, push, targets, env: self.env.as_ref() };
         if !mesh_view {
             ts.time(ctx, cmd, "canvas", || passes.canvas.record(&rec, material_buf))?;
@@ -456,7 +469,7 @@ impl Renderer {
         // left the frame before (`Targets::base`): while painting only the lobes change.
         let base_key = (settings.estimator != Estimator::Mis && !raster && copy_base).then(|| {
             let env = self.env.as_ref().map(|e| e.key.clone()).unwrap_or_default();
-            (env, key, material.diffuse.map(f64::to_bits))
+            (env, key, material.diffuse.map(f64::to_bits), push.forward[3].to_bits())
         });
         let restored = base_key.is_some() && base_of == base_key && !relist;
         if restored {

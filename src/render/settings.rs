@@ -107,6 +107,9 @@ pub struct Settings {
     /// The canvas light (unit) and its intensity.
     pub light: DVec3,
     pub intensity: f64,
+    /// The mesh view's backdrop: the level of the environment's mip chain it shows (0 the map
+    /// itself; fractional levels blend the two nearest, the last level is the map's mean).
+    pub backdrop_blur: f64,
 }
 
 /// A rendered frame: the linear image (alpha = coverage), the GPU time of every pass that ran and

@@ -56,8 +56,9 @@ pub struct Targets {
 pub type GBufferKey = ((String, usize, usize), crate::scene::Camera, bool);
 
 /// What `Targets::base` was drawn from besides the G-buffer: the environment's key, whether the
-/// diffuse term is `key`'s (the residual's SH and the lights), and the diffuse albedo's bits.
-pub type BaseKey = ((String, usize, usize, u64), bool, [u64; 3]);
+/// diffuse term is `key`'s (the residual's SH and the lights), the diffuse albedo's bits and the
+/// backdrop's mip level's bits.
+pub type BaseKey = ((String, usize, usize, u64), bool, [u64; 3], u32);
 
 impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {

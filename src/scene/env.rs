@@ -149,6 +149,30 @@ impl Environment {
         Ok(Environment { width, height, texels, stats, origin: origin.to_string() })
     }
 
+    /// The map turned by `deg` degrees about the up axis (`+y`), counter-clockwise seen from above:
+    /// what lay in direction `d` lies in `R_y(deg) d`, so every use of the map — the lighting, the key
+    /// lights, the SH, the backdrop — turns with it. A turn about `y` moves every row along `u` by
+    /// `deg / 360`: the texel at column `i` takes the map at `i + W·deg/360`, linearly between the two
+    /// nearest columns (a copy, bit for bit, when that is a whole number of columns).
+    pub fn rotated(&self, deg: f64) -> Environment {
+        let w = self.width;
+        let shift = (deg / 360.0).rem_euclid(1.0) * w as f64;
+        let (whole, f) = (shift.floor() as usize, shift - shift.floor());
+        let mut texels = Vec::with_capacity(self.texels.len());
+        for row in self.texels.chunks_exact(w) {
+            for i in 0..w {
+                let a = row[(i + whole) % w];
+                if f == 0.0 {
+                    texels.push(a);
+                } else {
+                    let b = row[(i + whole + 1) % w];
+                    texels.push(std::array::from_fn(|c| ((1.0 - f) * a[c] as f64 + f * b[c] as f64) as f32));
+                }
+            }
+        }
+        Environment { width: w, height: self.height, texels, stats: self.stats.clone(), origin: self.origin.clone() }
+    }
+
     /// A uniform 16×8 map, for tests.
     pub fn constant(rgb: [f32; 3]) -> Environment {
         Environment::from_texels(16, 8, vec![rgb; 128], "constant").expect("a valid size")
@@ -192,6 +216,37 @@ impl Environment {
         let top = self.at(i, j) * (1.0 - fx) + self.at(i + 1, j) * fx;
         let bottom = self.at(i, j + 1) * (1.0 - fx) + self.at(i + 1, j + 1) * fx;
         top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The radiance along `dir` at mip level `lod` of `chain` (this map's [`Environment::mip_chain`]),
+    /// as a Vulkan sampler with `LINEAR` filtering and mipmap mode returns it: `lod` clamped to the
+    /// chain, the two levels around it blended linearly, each read bilinearly (`u` repeating, `v`
+    /// clamped) — what the mesh view's backdrop shows at that blur.
+    pub fn lookup_chain(chain: &[MipLevel], dir: DVec3, lod: f64) -> DVec3 {
+        let lod = lod.clamp(0.0, (chain.len() - 1) as f64);
+        let (k, t) = (lod.floor() as usize, lod - lod.floor());
+        let (u, v) = Environment::uv(dir);
+        let at = |m: &MipLevel| {
+            let texel = |i: i64, j: i64| {
+                let i = i.rem_euclid(m.width as i64) as usize;
+                let j = j.clamp(0, m.height as i64 - 1) as usize;
+                let t = m.texels[j * m.width + i];
+                DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
+            };
+            let (x, y) = (u * m.width as f64 - 0.5, v * m.height as f64 - 0.5);
+            let (x0, y0) = (x.floor(), y.floor());
+            let (fx, fy) = (x - x0, y - y0);
+            let (i, j) = (x0 as i64, y0 as i64);
+            let top = texel(i, j) * (1.0 - fx) + texel(i + 1, j) * fx;
+            let bottom = texel(i, j + 1) * (1.0 - fx) + texel(i + 1, j + 1) * fx;
+            top * (1.0 - fy) + bottom * fy
+        };
+        let a = at(&chain[k]);
+        if t == 0.0 {
+            a
+        } else {
+            a * (1.0 - t) + at(&chain[k + 1]) * t
+        }
     }
 
     /// The full mip chain down to 1×1: level `k + 1` is `max(w/2, 1) × max(h/2, 1)`, each texel the
