@@ -21,6 +21,10 @@
 
 #[path = "hostile/support.rs"]
 mod support;
+#[path = "hostile/own_files.rs"]
+mod own_files;
+#[path = "hostile/blender.rs"]
+mod blender;
 #[path = "hostile/untrusted.rs"]
 mod untrusted;
 

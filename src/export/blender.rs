@@ -17,6 +17,7 @@ use crate::brdf::sampling;
 use crate::brdf::ward::Shape;
 use crate::brdf::{Material, Normalization};
 use crate::error::{Error, Result};
+use crate::scene::env::{MAX_ENV_FILE_BYTES, MAX_ENV_SIDE, MAX_ENV_TEXELS};
 
 /// Texels per side of a facet's lookup image.
 pub const TABLE_SIZE: usize = 48;
@@ -206,6 +207,9 @@ pub fn blender(m: &Material, name: &str) -> Result<String> {
     let _ = writeln!(data, "PAPER_NOTE = {}", if paper { format!("{PAPER_NOTE:?}") } else { "None".into() });
     let _ = writeln!(data, "DIFFUSE = {}", vec3(r.diffuse));
     let _ = writeln!(data, "TABLE_SIZE = {TABLE_SIZE}");
+    let _ = writeln!(data, "ENV_MAX_SIDE = {MAX_ENV_SIDE}");
+    let _ = writeln!(data, "ENV_MAX_TEXELS = {MAX_ENV_TEXELS}");
+    let _ = writeln!(data, "ENV_MAX_BYTES = {MAX_ENV_FILE_BYTES}");
     let _ = writeln!(data, "FACETS = [");
     for (f, t) in facets.iter().zip(&tables) {
         let q = f.frame;

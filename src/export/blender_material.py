@@ -17,6 +17,17 @@ OpenEXR (alpha: the object's coverage of the pixel centre), the image `brdf-shop
 computes. Without --env the object is lit by a uniform white environment. --save also writes the
 scene as a .blend (--out may then be left out).
 
+Run without flags in a file that already holds a material or node group of these names (a cube's
+`Material` in Blender's start file, or an earlier run of this script), it takes them over: their
+nodes are rebuilt and their users keep them, so the names come out exactly as exported.
+
+Every output (--out, --save) is written one way (class Output): checked before any work (an existing
+output must be a regular file; its folder a folder this process can write in), written by Blender
+into a private folder that tempfile.mkdtemp creates beside it, then moved onto its name with
+os.replace; the private folder is removed on success, refusal or error. An environment map whose
+header declares more texels than brdf-shop reads (ENV_MAX_SIDE a side, ENV_MAX_TEXELS in all) is
+refused before Blender allocates for it. Every refusal is one line on stderr and exit status 1.
+
 What is exact and what is approximate (docs/exports.md, Blender (Cycles)): the diffuse term is
 Cycles' Lambert closure, exactly brdf-shop's. Each facet frame F of a reciprocal lobe (a split lobe
 has two, Q and Q^-1, at half weight) is a Beckmann Glossy BSDF whose normal is the facet's mean
@@ -31,14 +42,20 @@ Cycles': the reflected energy matches per view, the shape of each lobe is Cycles
 
 import math
 import os
+import shutil
+import stat
+import struct
 import sys
+import tempfile
 
 import bpy
 
 # The material, filled in by `brdf-shop export`: the diffuse albedo and, per facet frame, its
 # albedo share, rotation (w, x, y, z) in the local shading frame, roughness, tangent angle and
 # lookup image (TABLE_SIZE² values, rows from the bottom; texel (u, v) holds the view
-# v_f = (x, y, z) in the facet frame with (u, v) = 1/2 + 1/2 (x, y) / (1 + z)).
+# v_f = (x, y, z) in the facet frame with (u, v) = 1/2 + 1/2 (x, y) / (1 + z)); and brdf-shop's
+# limits on environment maps (ENV_MAX_SIDE texels a side, ENV_MAX_TEXELS in all, ENV_MAX_BYTES of
+# file), the ones its own loader applies.
 
 
 class Facet:
@@ -60,6 +77,22 @@ FAULT = os.environ.get("BRDF_SHOP_BLENDER_FAULT", "")
 
 class UserError(Exception):
     pass
+
+
+def show(path):
+    """A path for a message: its first 200 characters, control characters and undecodable bytes
+    escaped, so that a message stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(path)[:200])
+
+
+def reason(e):
+    """The one-line reason of an OSError (its strerror) or of Blender's RuntimeError (its last line,
+    without Blender's `Error: ` prefix)."""
+    if isinstance(e, OSError) and e.strerror:
+        return e.strerror
+    lines = [l.strip() for l in str(e).splitlines() if l.strip()]
+    text = lines[-1] if lines else type(e).__name__
+    return (text[len("Error: ") :] if text.startswith("Error: ") else text)[:200]
 
 
 # ---- Vectors and quaternions (w, x, y, z), brdf-shop's local shading frame. ----
@@ -136,8 +169,16 @@ class Graph:
         return n.outputs[0]
 
 
+def own_datablock(collection, name):
+    """The datablock of the open file (not linked from a library) named exactly `name`, or None."""
+    return next((d for d in collection if d.name == name and d.library is None), None)
+
+
 def lookup_image(name, table):
     size = TABLE_SIZE
+    old = own_datablock(bpy.data.images, name)
+    if old is not None:  # a lookup image of an earlier run: its node group is rebuilt
+        bpy.data.images.remove(old)
     img = bpy.data.images.new(name, size, size, alpha=False, float_buffer=True)
     img.colorspace_settings.name = "Non-Color"
     pixels = [1.0] * (4 * size * size)
@@ -155,7 +196,13 @@ def build_group(name):
     """The node group `brdf-shop NAME`: brdf-shop's shading frame from the shading normal N and the
     view I (Geometry node), a Diffuse BSDF, and per facet a Glossy BSDF whose colour is its albedo
     share times its lookup image at the view in the facet frame, all added."""
-    tree = bpy.data.node_groups.new("brdf-shop " + name, "ShaderNodeTree")
+    group_name = "brdf-shop " + name
+    tree = own_datablock(bpy.data.node_groups, group_name)
+    if tree is not None and tree.bl_idname == "ShaderNodeTree":
+        tree.nodes.clear()
+        tree.interface.clear()
+    else:
+        tree = bpy.data.node_groups.new(group_name, "ShaderNodeTree")
     tree.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
     g = Graph(tree)
     out = g.node("NodeGroupOutput", 8)
@@ -229,9 +276,11 @@ def build_group(name):
 
 
 def build_material():
-    """The material NAME: the node group into the Material Output."""
+    """The material NAME: the node group into the Material Output. A material and node group of
+    these names already in the open file are taken over (their nodes rebuilt, their users kept), so
+    that the names are exactly NAME and `brdf-shop NAME`, not NAME.001."""
     tree = build_group(NAME)
-    mat = bpy.data.materials.new(NAME)
+    mat = own_datablock(bpy.data.materials, NAME) or bpy.data.materials.new(NAME)
     if mat.node_tree is None:  # Blender before 5.0 makes the node tree on request
         mat.use_nodes = True
     mat.node_tree.nodes.clear()
@@ -286,7 +335,7 @@ def mesh_object(path):
     if ext not in (".obj", ".ply", ".glb"):
         raise UserError("--mesh: %r is not sphere, an .obj, .ply or .glb file" % path[:80])
     if not os.path.isfile(path):
-        raise UserError("%s: no such file" % path[:200])
+        raise UserError("%s: no such file" % show(path))
     before = set(bpy.data.objects)
     try:
         if ext == ".obj":
@@ -299,10 +348,10 @@ def mesh_object(path):
             addon_utils.enable("io_scene_gltf2", default_set=True)
             bpy.ops.import_scene.gltf(filepath=path)
     except Exception as e:  # the importers raise RuntimeError with Blender's report
-        raise UserError("%s: %s" % (path[:200], str(e).strip().splitlines()[-1][:200] if str(e).strip() else "not read"))
+        raise UserError("%s: %s" % (show(path), str(e).strip().splitlines()[-1][:200] if str(e).strip() else "not read"))
     objs = [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
     if not objs:
-        raise UserError("%s: no mesh in the file" % path[:200])
+        raise UserError("%s: no mesh in the file" % show(path))
     for o in bpy.data.objects:
         o.select_set(o in objs)
     bpy.context.view_layer.objects.active = objs[0]
@@ -314,18 +363,132 @@ def mesh_object(path):
     bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
     mesh = obj.data
     if len(mesh.vertices) == 0:
-        raise UserError("%s: the mesh has no vertices" % path[:200])
+        raise UserError("%s: the mesh has no vertices" % show(path))
     lo = [min(v.co[i] for v in mesh.vertices) for i in range(3)]
     hi = [max(v.co[i] for v in mesh.vertices) for i in range(3)]
     centre = [(a + b) * 0.5 for a, b in zip(lo, hi)]
     radius = 0.5 * math.sqrt(sum((b - a) ** 2 for a, b in zip(lo, hi)))
     if not radius > 0.0:
-        raise UserError("%s: the mesh has no extent" % path[:200])
+        raise UserError("%s: the mesh has no extent" % show(path))
     for v in mesh.vertices:
         v.co = [(v.co[i] - centre[i]) / radius for i in range(3)]
     if not mesh.has_custom_normals:
         mesh.shade_smooth()
     return obj
+
+
+def read_exact(f, n):
+    data = f.read(n)
+    if len(data) != n:
+        raise ValueError("the header is cut short")
+    return data
+
+
+def read_name(f):
+    """A NUL-terminated attribute name or type of an OpenEXR header (at most 255 bytes)."""
+    out = bytearray()
+    while True:
+        c = read_exact(f, 1)
+        if c == b"\0":
+            return bytes(out)
+        out += c
+        if len(out) > 255:
+            raise ValueError("an attribute name longer than 255 bytes")
+
+
+def exr_sizes(f):
+    """The data window size (width, height) of each part of an OpenEXR file, from its headers (the
+    size Blender allocates for)."""
+    if read_exact(f, 4) != b"\x76\x2f\x31\x01":
+        raise ValueError("not an OpenEXR file")
+    multipart = bool(struct.unpack("<I", read_exact(f, 4))[0] & 0x1000)
+    sizes = []
+    while len(sizes) < 1024:
+        window, attributes = None, 0
+        while True:
+            name = read_name(f)
+            if not name:
+                break
+            attributes += 1
+            if attributes > 4096:
+                raise ValueError("more than 4096 header attributes")
+            read_name(f)
+            n = struct.unpack("<i", read_exact(f, 4))[0]
+            if n < 0:
+                raise ValueError("an attribute of negative size")
+            if name == b"dataWindow" and n == 16:
+                x0, y0, x1, y1 = struct.unpack("<4i", read_exact(f, 16))
+                window = (x1 - x0 + 1, y1 - y0 + 1)
+            else:
+                f.seek(n, 1)
+        if multipart and attributes == 0 and sizes:
+            return sizes  # the empty header that ends a multi-part file's headers
+        if window is None:
+            raise ValueError("a header without a dataWindow")
+        sizes.append(window)
+        if not multipart:
+            return sizes
+    raise ValueError("more than 1024 parts")
+
+
+def hdr_sizes(f):
+    """The size (width, height) a Radiance .hdr file's resolution line declares."""
+    head = f.read(65536)
+    if not head.startswith(b"#?"):
+        raise ValueError("not a Radiance HDR file")
+    end = head.find(b"\n\n")
+    line = head[end + 2 :].split(b"\n", 1)
+    if end < 0 or len(line) < 2:
+        raise ValueError("no resolution line in its first 65536 bytes")
+    t = line[0].split()
+    axes = [a[1:2] for a in t[0::2]]
+    signs_ok = all(a[:1] in (b"-", b"+") for a in t[0::2])
+    if len(t) != 4 or sorted(axes) != [b"X", b"Y"] or not signs_ok:
+        raise ValueError("not a resolution line: %r" % line[0][:40].decode("latin-1"))
+    try:
+        a, b = int(t[1]), int(t[3])
+    except ValueError:
+        raise ValueError("not a resolution line: %r" % line[0][:40].decode("latin-1"))
+    return [(b, a) if axes[0] == b"Y" else (a, b)]
+
+
+def check_env(path):
+    """Refuses, before Blender reads it, an environment map that is not a regular file, is larger
+    than ENV_MAX_BYTES, or whose header declares more texels than brdf-shop reads: ENV_MAX_SIDE a
+    side, ENV_MAX_TEXELS in all (`brdf-shop export` fills them in from src/scene/env.rs). Blender
+    allocates a declared size in full before it reads a pixel."""
+    shown = show(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in (".exr", ".hdr"):
+        raise UserError("--env: %r is not an .exr or .hdr file" % shown)
+    try:
+        # Non-blocking, so that a FIFO is refused instead of waited on.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except FileNotFoundError:
+        raise UserError("%s: no such file" % shown)
+    except OSError as e:
+        raise UserError("--env: %s: %s" % (shown, reason(e)))
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise UserError("--env: %s: not a regular file" % shown)
+        if st.st_size > ENV_MAX_BYTES:
+            raise UserError("--env: %s: %d bytes, more than the limit of %d" % (shown, st.st_size, ENV_MAX_BYTES))
+        try:
+            sizes = exr_sizes(f) if ext == ".exr" else hdr_sizes(f)
+        except (ValueError, struct.error) as e:
+            kind = "OpenEXR" if ext == ".exr" else "Radiance HDR"
+            raise UserError("--env: %s: not a readable %s file: %s" % (shown, kind, e))
+        except OSError as e:
+            raise UserError("--env: %s: %s" % (shown, reason(e)))
+    for w, h in sizes:
+        declares = "--env: %s: the header declares %dx%d" % (shown, w, h)
+        if w < 1 or h < 1:
+            raise UserError("%s, an empty image" % declares)
+        if w > ENV_MAX_SIDE or h > ENV_MAX_SIDE:
+            raise UserError("%s, longer than the limit of %d texels a side" % (declares, ENV_MAX_SIDE))
+        if w * h > ENV_MAX_TEXELS:
+            raise UserError("%s, more than the limit of %d texels" % (declares, ENV_MAX_TEXELS))
 
 
 def load_env(path):
@@ -335,7 +498,7 @@ def load_env(path):
         if img.size[0] == 0 or img.size[1] == 0:
             raise RuntimeError("no pixels")
     except RuntimeError as e:
-        raise UserError("%s: not a readable image (%s)" % (path[:200], str(e).strip()[:120]))
+        raise UserError("%s: not a readable image (%s)" % (show(path), str(e).strip()[:120]))
     return img
 
 
@@ -440,33 +603,95 @@ def coverage(scene, width, height):
     return out
 
 
-def render(scene, out, width, height):
-    """Renders to a temp file beside `out`, sets alpha to the coverage, then renames it: an existing
-    output is replaced only by a complete image."""
-    folder = os.path.dirname(os.path.abspath(out))
-    base = os.path.join(folder, ".%s.%d" % (os.path.basename(out), os.getpid()))
-    raw, tmp = base + ".render.exr", base + ".tmp.exr"
-    try:
-        scene.render.filepath = raw
-        scene.render.use_file_extension = False
-        bpy.ops.render.render(write_still=True)
-        import numpy as np
+class Output:
+    """An output file (--out, --save), written one way: `open` checks it before any work (an existing
+    output must be a regular file, as brdf-shop's own outputs) and creates a private folder beside it
+    with tempfile.mkdtemp (a fresh name of a few bytes, mode 0700: nothing can be planted in it, a
+    folder this process cannot write in fails here, and an output name of 255 bytes still fits);
+    `write` has Blender write the file there under a short fixed name (with any file Blender writes
+    beside it, a .blend1 backup included) and moves it onto the output's name with os.replace, with
+    the permission bits of the file it replaces; `close` removes the private folder."""
 
-        img = bpy.data.images.load(raw, check_existing=False)
+    def __init__(self, flag, path, ext):
+        self.flag, self.shown, self.ext = flag, path, ext
+        self.path = os.path.abspath(path)
+        self.folder = None
+
+    def fail(self, why):
+        return UserError("%s: %s: %s" % (self.flag, show(self.shown), why))
+
+    def check_existing(self):
+        """Refuses an existing output that is a folder or not a regular file (a device, FIFO or
+        socket, through symlinks too); checked at `open` and again just before the rename."""
+        try:
+            mode = os.stat(self.path).st_mode
+        except FileNotFoundError:
+            return None
+        except OSError as e:
+            raise self.fail(reason(e))
+        if stat.S_ISDIR(mode):
+            raise self.fail("is a folder, not a file")
+        if not stat.S_ISREG(mode):
+            raise self.fail("is not a regular file (a device, FIFO or socket); outputs replace regular files only")
+        return stat.S_IMODE(mode)
+
+    def open(self):
+        if not self.path.lower().endswith(self.ext):
+            raise self.fail("only %s is written" % self.ext)
+        parent = os.path.dirname(self.path)
+        if not os.path.isdir(parent):
+            there = "is not a folder" if os.path.lexists(parent) else "does not exist"
+            raise self.fail("the folder %s %s" % (show(parent), there))
+        self.check_existing()
+        try:
+            self.folder = tempfile.mkdtemp(prefix=".brdf-shop-", dir=parent)
+        except OSError as e:
+            raise self.fail("cannot write in %s: %s" % (show(parent), reason(e)))
+        return self
+
+    def write(self, produce):
+        """`produce(tmp)` writes the whole file at `tmp` (in the private folder); then it replaces
+        the output."""
+        tmp = os.path.join(self.folder, "o" + self.ext)
+        try:
+            produce(tmp)
+            if not stat.S_ISREG(os.lstat(tmp).st_mode):
+                raise self.fail("Blender wrote no file")
+            mode = self.check_existing()
+            if mode is not None:
+                os.chmod(tmp, mode)
+            os.replace(tmp, self.path)
+        except (OSError, RuntimeError) as e:  # bpy.ops raise RuntimeError with Blender's report
+            raise self.fail(reason(e))
+
+    def close(self):
+        if self.folder is not None:
+            shutil.rmtree(self.folder, ignore_errors=True)
+            self.folder = None
+
+
+def render(scene, path, width, height):
+    """Renders the image into `path`'s folder (the output's private folder), sets alpha to the
+    coverage and writes it at `path`."""
+    import numpy as np
+
+    raw = os.path.join(os.path.dirname(path), "r.exr")
+    scene.render.filepath = raw
+    scene.render.use_file_extension = False
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(raw, check_existing=False)
+    try:
         img.colorspace_settings.name = "Linear Rec.709"
         px = np.empty(width * height * 4, dtype=np.float32)
         img.pixels.foreach_get(px)
         px[3::4] = coverage(scene, width, height)
         img.pixels.foreach_set(px)
-        img.filepath_raw = tmp
+        img.filepath_raw = path
         img.file_format = "OPEN_EXR"
         img.use_half_precision = False
         img.save()
-        os.replace(tmp, out)
     finally:
-        for p in (raw, tmp):
-            if os.path.exists(p):
-                os.remove(p)
+        bpy.data.images.remove(img)
 
 
 def parse_size(text):
@@ -515,10 +740,13 @@ class Parser:
 
 def main(argv=None):
     args = script_args(argv)
+    outputs = []
+    script = os.path.basename(__file__) if "__file__" in globals() else "brdf-shop"
     try:
         if not args:
             mat = build_material()
-            print("brdf-shop: created material %r (node group %r)" % (mat.name, "brdf-shop " + NAME))
+            group = next(n.node_tree for n in mat.node_tree.nodes if n.type == "GROUP")
+            print("brdf-shop: created material %r (node group %r)" % (mat.name, group.name))
             if PAPER_NOTE:
                 print("brdf-shop: note: %s" % PAPER_NOTE)
             return 0
@@ -535,28 +763,42 @@ def main(argv=None):
         out, save = a.get("out"), a.get("save")
         if out is None and save is None:
             raise UserError("--out: missing (or give --save M.blend)")
-        for flag, path, ext in (("--out", out, ".exr"), ("--save", save, ".blend")):
-            if path is None:
-                continue
-            if not path.lower().endswith(ext):
-                raise UserError("%s: %r: only %s is written" % (flag, path[:80], ext))
-            folder = os.path.dirname(os.path.abspath(path))
-            if not os.path.isdir(folder) or os.path.isdir(path):
-                raise UserError("%s: %r: its folder does not exist or it is a folder" % (flag, path[:200]))
+        both = out is not None and save is not None and os.path.exists(out) and os.path.exists(save)
+        if both and os.path.samefile(out, save):
+            raise UserError("--save: %s: names the same file as --out" % show(save))
         env = a.get("env")
         if env is not None:
-            if os.path.splitext(env)[1].lower() not in (".exr", ".hdr"):
-                raise UserError("--env: %r is not an .exr or .hdr file" % env[:200])
-            if not os.path.isfile(env):
-                raise UserError("%s: no such file" % env[:200])
+            check_env(env)
+        for flag, path, ext in (("--save", save, ".blend"), ("--out", out, ".exr")):
+            if path is not None:
+                outputs.append(Output(flag, path, ext).open())
         scene = build_scene(env, a.get("mesh", "sphere"), width, height, spp, seed)
-        if save is not None:
-            bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(save), check_existing=False)
-        if out is not None:
-            render(scene, out, width, height)
+        for o in outputs:
+            if o.flag == "--save":
+                # A copy, so the open file keeps no name of the private folder; paths kept as they
+                # are (the environment map's absolute), not made relative to the private folder.
+                o.write(
+                    lambda tmp: bpy.ops.wm.save_as_mainfile(
+                        filepath=tmp, check_existing=False, copy=True, relative_remap=False
+                    )
+                )
+            else:
+                o.write(lambda tmp: render(scene, tmp, width, height))
     except UserError as e:
-        print("%s: %s" % (os.path.basename(__file__) if "__file__" in globals() else "brdf-shop", e), file=sys.stderr)
+        print("%s: %s" % (script, e), file=sys.stderr)
         return 1
+    except OSError as e:
+        print("%s: %s: %s" % (script, show(e.filename) if e.filename else "error", reason(e)), file=sys.stderr)
+        return 1
+    except MemoryError:
+        print("%s: out of memory" % script, file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("%s: interrupted" % script, file=sys.stderr)
+        return 130
+    finally:
+        for o in outputs:
+            o.close()
     return 0
 
 
