@@ -11,9 +11,9 @@ layout(push_constant) uniform Push {
     uvec4 window_size;  // W, H, mesh view height, 1 to draw the marker
     uvec4 views;        // mesh view x, width; canvas x, side
     vec4 scale;         // mesh view scale (exposure / summed samples), canvas exposure, marker x, y (pixels)
-    vec4 background;    // window grey, 0..1 per channel
+    vec4 background;    // window grey, 0..1 per channel; the backdrop's scale (brightness / summed samples)
     uvec4 region;       // the rectangle this dispatch writes: x, y, width, height
-    uvec4 sources;      // the mesh view's image width, height; the canvas image's side; 0
+    uvec4 sources;      // the mesh view's image width, height; the canvas image's side; the samples it sums
 } pc;
 
 // What this pipeline writes (the others' pixels are left as they are; an `if` runs both sides on
@@ -39,15 +39,15 @@ void magnify(ivec2 q, ivec2 place, ivec2 source, out ivec2 a, out ivec2 b, out v
     b = clamp(ivec2(f) + 1, ivec2(0), source - 1);
 }
 
-// The mesh view's radiance at pixel q of its place (`place` pixels).
-vec3 mesh_at(ivec2 q, ivec2 place) {
+// The mesh view's radiance and coverage at pixel q of its place (`place` pixels).
+vec4 mesh_at(ivec2 q, ivec2 place) {
     ivec2 source = ivec2(pc.sources.xy);
-    if (source == place) return imageLoad(mesh, q).rgb;
+    if (source == place) return imageLoad(mesh, q);
     ivec2 a, b;
     vec2 t;
     magnify(q, place, source, a, b, t);
-    vec3 top = mix(imageLoad(mesh, a).rgb, imageLoad(mesh, ivec2(b.x, a.y)).rgb, t.x);
-    vec3 bottom = mix(imageLoad(mesh, ivec2(a.x, b.y)).rgb, imageLoad(mesh, b).rgb, t.x);
+    vec4 top = mix(imageLoad(mesh, a), imageLoad(mesh, ivec2(b.x, a.y)), t.x);
+    vec4 bottom = mix(imageLoad(mesh, ivec2(a.x, b.y)), imageLoad(mesh, b), t.x);
     return mix(top, bottom, t.y);
 }
 
@@ -72,7 +72,12 @@ void main() {
     bool in_mesh = p.x >= mx && p.x < mx + mw && p.y < int(pc.window_size.z);
     bool in_canvas = !in_mesh && p.x >= cx && p.x < cx + cs && p.y < cs;
     if (MESH && in_mesh) {
-        c = srgb(mesh_at(ivec2(p.x - mx, p.y), ivec2(mw, pc.window_size.z)) * pc.scale.x);
+        // The object at the exposure, the backdrop (alpha 0) at its own brightness. The image is a
+        // sum over `sources.w` samples, alpha (the coverage) summed with them: the pixel's coverage
+        // is alpha over that count, and weighs the two scales (a magnified silhouette blends them).
+        vec4 m = mesh_at(ivec2(p.x - mx, p.y), ivec2(mw, pc.window_size.z));
+        float cover = clamp(m.a / float(max(pc.sources.w, 1u)), 0.0, 1.0);
+        c = srgb(m.rgb * mix(pc.background.w, pc.scale.x, cover));
     } else if (CANVAS && in_canvas) {
         c = srgb(canvas_at(ivec2(p.x - cx, p.y), ivec2(cs)) * pc.scale.y);
         ivec2 m = ivec2(pc.scale.zw);

@@ -460,3 +460,45 @@ fn the_layout_fills_the_window_and_the_camera_frames_the_mesh() {
     s.handle(Input::FrameView);
     assert!((s.distance - framed(&s)).abs() < 1e-12 && s.zoom == 1.0);
 }
+
+/// Shift-drag on the mesh view turns the environment (and nothing else: the orbit stays); the
+/// backdrop's keys switch it to black and back, blur it and brighten it within their ranges; each
+/// asks for the session's view settings to be kept.
+#[test]
+fn shift_drag_turns_the_environment_and_keys_set_the_backdrop() {
+    use brdf_shop::editor::backdrop::{Backdrop, BLUR_RANGE};
+    use brdf_shop::editor::state::{Input, Layout, State, TURN_DEG_PER_PIXEL};
+    let settings = brdf_shop::brush::strokes::default_strokes().unwrap().settings("test").unwrap();
+    let mut s = State::new(Material::scratch(), settings, Layout::new(1280, 720));
+    let (mx, my) = (s.layout.mesh_x as f64 + 100.0, 300.0);
+    let (yaw, pitch) = (s.yaw, s.pitch);
+    s.handle(Input::CursorMoved(mx, my));
+    s.handle(Input::Modifiers { shift: true });
+    s.handle(Input::Button { pressed: true, right: false });
+    let fx = s.handle(Input::CursorMoved(mx + 40.0, my + 25.0));
+    assert!(fx.env_turned && fx.session_changed && fx.redraw, "{fx:?}");
+    assert!((s.env_rotation - 40.0 * TURN_DEG_PER_PIXEL).abs() < 1e-12, "{}", s.env_rotation);
+    assert_eq!((s.yaw, s.pitch), (yaw, pitch), "a Shift-drag does not orbit");
+    // Back past zero: the turn stays in [0, 360).
+    s.handle(Input::CursorMoved(mx - 200.0, my));
+    assert!((s.env_rotation - (360.0 - 200.0 * TURN_DEG_PER_PIXEL)).abs() < 1e-9, "{}", s.env_rotation);
+    s.handle(Input::Button { pressed: false, right: false });
+    s.handle(Input::Modifiers { shift: false });
+    // Without Shift the same drag orbits and leaves the turn.
+    let turned = s.env_rotation;
+    s.handle(Input::CursorMoved(mx, my));
+    s.handle(Input::Button { pressed: true, right: false });
+    let fx = s.handle(Input::CursorMoved(mx + 10.0, my));
+    assert!(!fx.env_turned && s.env_rotation == turned && s.yaw != yaw);
+    s.handle(Input::Button { pressed: false, right: false });
+    // The backdrop's keys.
+    assert_eq!(s.backdrop, Backdrop::default());
+    assert!(s.handle(Input::ToggleBackdrop).session_changed && !s.backdrop.shown);
+    s.handle(Input::ToggleBackdrop);
+    for _ in 0..40 {
+        s.handle(Input::BackdropBlur(true));
+    }
+    assert_eq!(s.backdrop.blur, BLUR_RANGE.1);
+    s.handle(Input::BackdropBrightness(true));
+    assert!((s.backdrop.brightness - 1.25).abs() < 1e-12 && s.backdrop.shown);
+}

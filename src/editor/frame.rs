@@ -21,6 +21,8 @@ pub(super) struct MeshKey {
     orbit: [f64; 4],
     size: (u32, u32),
     spp: u32,
+    /// The backdrop's blur (its mip level's bits): the mesh view reads the map at it.
+    blur: u64,
 }
 
 /// What a presented frame drew, for its statistics and the preview's model.
@@ -75,6 +77,7 @@ impl App {
             camera: state.camera(),
             light,
             intensity: state.settings.canvas.intensity,
+            backdrop_blur: state.backdrop.blur,
         };
         let mesh_key = MeshKey {
             material: generation,
@@ -82,6 +85,7 @@ impl App {
             orbit: [state.yaw, state.pitch, state.distance, state.fov_deg],
             size: (l.mesh_w, l.height),
             spp: self.spp,
+            blur: state.backdrop.blur.to_bits(),
         };
         let canvas_key = CanvasKey {
             material: generation,
@@ -144,6 +148,8 @@ impl App {
             mesh: (l.mesh_x, l.mesh_w, l.height),
             canvas: (l.canvas_x, l.canvas),
             mesh_scale: (state.exposure * self.env_summary.exposure) as f32,
+            backdrop_scale: state.backdrop.scale(self.env_backdrop) as f32,
+            summed: 1,
             canvas_scale: state.exposure as f32,
             marker: state.settings.canvas.mirror_point().map(|(cu, cv)| {
                 let (x, y) = l.canvas_point(cu, cv);

@@ -36,6 +36,11 @@ pub fn key_input(key: &Key, mods: ModifiersState) -> Option<Input> {
         ("+" | "=", false) => Input::Exposure(true),
         ("-", false) => Input::Exposure(false),
         ("r", false) => Input::Restore,
+        ("b", false) => Input::ToggleBackdrop,
+        ("]", false) => Input::BackdropBlur(true),
+        ("[", false) => Input::BackdropBlur(false),
+        (".", false) => Input::BackdropBrightness(true),
+        (",", false) => Input::BackdropBrightness(false),
         _ => return None,
     })
 }
@@ -96,7 +101,7 @@ impl ApplicationHandler for App {
             }
             WindowEvent::ModifiersChanged(m) => {
                 self.modifiers = m.state();
-                return;
+                Input::Modifiers { shift: self.modifiers.shift_key() }
             }
             WindowEvent::CursorMoved { position, .. } => Input::CursorMoved(position.x, position.y),
             WindowEvent::MouseInput { state, button, .. } => {

@@ -13,6 +13,7 @@
 //! `view` renders, composes and presents on the GPU with frames in flight; `recovery` keeps unsaved
 //! work; `stats` records frame times.
 
+pub mod backdrop;
 pub mod export;
 mod frame;
 pub mod graph;
@@ -53,8 +54,15 @@ pub use options::{check_frame_budget, check_size, clamp_to_display, parse_export
 
 struct App {
     opts: Options,
+    /// The environment as loaded; the renderer has it turned by the session's `env_rotation`.
     env: Environment,
     env_summary: EnvSummary,
+    /// `backdrop::auto_brightness` of `env` (a turn does not change it).
+    env_backdrop: f64,
+    /// The session's view settings as loaded at the start (`backdrop::Session`).
+    session: backdrop::Session,
+    /// Whether the warning that the session file cannot be written was printed.
+    session_warned: bool,
     mesh: Mesh,
     /// Changes when the environment or the mesh is replaced.
     scene_generation: u64,
@@ -187,7 +195,6 @@ impl App {
         gpu.renderer.build_in_background = Some(Arc::new(move || {
             let _ = proxy.send_event(());
         }));
-        gpu.renderer.set_environment(&self.env)?;
         gpu.renderer.set_mesh(&self.mesh)?;
         self.egui_state = Some(egui_winit::State::new(
             self.egui_ctx.clone(),
@@ -204,6 +211,9 @@ impl App {
             None => Settings::new(crate::brush::Canvas { light: DVec3::Z, intensity: 1.0 }),
         };
         let mut state = State::new(self.start.clone(), settings, Layout::new(w.max(1), h.max(1)));
+        (state.env_rotation, state.backdrop) = (self.session.env_rotation, self.session.backdrop);
+        self.gpu = Some(gpu);
+        self.set_env(state.env_rotation)?;
         if self.replay.is_none() {
             // The light as the orbit camera sees the environment's brightest direction.
             state.default_light = light_from(&self.env_summary, &state.camera());
@@ -226,7 +236,6 @@ impl App {
                 format!("unsaved work from the last session found ({}): press R to restore it", path.display());
         }
         self.state = Some(state);
-        self.gpu = Some(gpu);
         Ok(())
     }
 
@@ -244,6 +253,14 @@ impl App {
     fn handle(&mut self, input: Input) -> Result<()> {
         let Some(state) = self.state.as_mut() else { return Ok(()) };
         let fx = state.handle(input);
+        if fx.env_turned {
+            let rotation = state.env_rotation;
+            self.set_env(rotation)?;
+        }
+        if fx.session_changed {
+            self.keep_session();
+        }
+        let Some(state) = self.state.as_mut() else { return Ok(()) };
         if fx.material_changed {
             if let Some(status) = keep_recovery(state.material(), &mut self.recovery_warned) {
                 state.status = status;
@@ -294,16 +311,18 @@ impl App {
 
     fn load_dropped(&mut self, p: &Path) -> Result<()> {
         let name = p.to_string_lossy().to_lowercase();
-        let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(()) };
+        let Some(camera) = self.state.as_ref().map(|s| s.camera()) else { return Ok(()) };
         if name.ends_with(".exr") || name.ends_with(".hdr") {
             let env = Environment::load(p)?;
-            gpu.renderer.set_environment(&env)?;
-            let summary = EnvSummary::of(&env);
-            state.default_light = light_from(&summary, &state.camera());
-            state.settings.canvas.light = state.default_light;
+            self.env_backdrop = backdrop::auto_brightness(&env);
             self.env = env;
-            self.env_summary = summary;
-            self.scene_generation += 1;
+            let rotation = self.state.as_ref().map_or(0.0, |s| s.env_rotation);
+            self.set_env(rotation)?;
+        }
+        let (Some(gpu), Some(state)) = (self.gpu.as_mut(), self.state.as_mut()) else { return Ok(()) };
+        if name.ends_with(".exr") || name.ends_with(".hdr") {
+            state.default_light = light_from(&self.env_summary, &camera);
+            state.settings.canvas.light = state.default_light;
         } else if Mesh::is_mesh_file(p) {
             // The same loader as `--mesh`: OBJ, glTF (.gltf, .glb) or PLY.
             self.mesh = Mesh::load(p)?;
@@ -318,6 +337,35 @@ impl App {
         }
         gpu.window.request_redraw();
         Ok(())
+    }
+
+    /// Gives the renderer the environment turned by `rotation` degrees about the up axis (the
+    /// lighting, the key lights, the SH and the backdrop turn together) and takes its summary.
+    fn set_env(&mut self, rotation: f64) -> Result<()> {
+        let turned = (rotation != 0.0).then(|| self.env.rotated(rotation));
+        let env = turned.as_ref().unwrap_or(&self.env);
+        if let Some(gpu) = self.gpu.as_mut() {
+            gpu.renderer.set_environment(env)?;
+        }
+        self.env_summary = EnvSummary::of(env);
+        self.scene_generation += 1;
+        Ok(())
+    }
+
+    /// Keeps the session's view settings (`backdrop::Session`): a file that cannot be written is a
+    /// warning once and a status line; the session goes on.
+    fn keep_session(&mut self) {
+        let Some(state) = self.state.as_mut() else { return };
+        let session = backdrop::Session { env_rotation: state.env_rotation, backdrop: state.backdrop };
+        let Some(path) = backdrop::session_path() else { return };
+        if let Err(e) = session.save(&path) {
+            let msg = format!("the view settings are not kept: the session file cannot be written ({e})");
+            if !self.session_warned {
+                eprintln!("brdf-shop: warning: {}", crate::fsio::escape_controls(&msg));
+                self.session_warned = true;
+            }
+            state.status = format!("warning: {msg}");
+        }
     }
 
     /// Whether the window manager has minimised the window (an X11 window stays its size when
@@ -431,7 +479,7 @@ impl App {
             let device = self.gpu.as_ref().map_or(String::new(), |g| g.renderer.device_name().to_string());
             let size = (state.layout.width, state.layout.height);
             let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
-            let views = stats::views_json(state, self.env_summary.exposure, self.spp, refined);
+            let views = stats::views_json(state, (self.env_summary.exposure, self.env_backdrop), self.spp, refined);
             let json = stats::frame_stats_json(&device, size, &self.frame_stats, self.skipped_minimised, views);
             crate::fsio::write_atomic(p, json.as_bytes())?;
         }
@@ -475,6 +523,14 @@ pub fn run(opts: Options) -> Result<()> {
         (None, Some(_)) => Material::scratch(),
         (None, None) => crate::brush::strokes::default_material()?,
     };
+    let session = match backdrop::session_path().map(|p| (backdrop::Session::load(&p), p)) {
+        Some((Ok(s), _)) => s,
+        Some((Err(why), p)) => {
+            eprintln!("brdf-shop: warning: the session file {} is ignored: {why}", crate::fsio::show(&p));
+            backdrop::Session::default()
+        }
+        None => backdrop::Session::default(),
+    };
     let event_loop = EventLoop::new().map_err(|e| {
         Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
     })?;
@@ -484,6 +540,9 @@ pub fn run(opts: Options) -> Result<()> {
         proxy: event_loop.create_proxy(),
         opts,
         env_summary: EnvSummary::of(&env),
+        env_backdrop: backdrop::auto_brightness(&env),
+        session,
+        session_warned: false,
         env,
         mesh,
         scene_generation: 0,

@@ -15,6 +15,8 @@ use crate::brush::Settings;
 use crate::export::Format;
 use crate::scene::Camera;
 
+use super::backdrop::{Backdrop, BLUR_RANGE};
+
 /// A user action, from the window or synthesised.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Input {
@@ -47,6 +49,18 @@ pub enum Input {
     Exposure(bool),
     /// Bring back the last session's unsaved material, when one was found (R).
     Restore,
+    /// Whether Shift is held (a left drag on the mesh view then turns the environment).
+    Modifiers {
+        shift: bool,
+    },
+    /// Turn the environment about the up axis by this many degrees (a Shift-drag, `--env-rotation`).
+    TurnEnv(f64),
+    /// The backdrop: the map or black (B), blurred more or less (`]`, `[`), brighter or darker
+    /// (`.`, `,`), or set whole (the panel).
+    ToggleBackdrop,
+    BackdropBlur(bool),
+    BackdropBrightness(bool),
+    SetBackdrop(Backdrop),
 }
 
 /// The tool panel's width (left edge of the window), when the window is wide enough for it.
@@ -69,7 +83,9 @@ pub struct Layout {
 
 impl Layout {
     pub fn new(width: u32, height: u32) -> Layout {
-        let mesh_x = if width >= 3 * PANEL_WIDTH { PANEL_WIDTH } else { 0 };
+        // The tool panel is always drawn at the left edge: the views start right of it (in a
+        // window narrower than two panels, half the width is left to them).
+        let mesh_x = PANEL_WIDTH.min(width / 2);
         // The right column is as wide as the canvas (at most half of what the panel leaves, at
         // most 3/5 of the height: the graphs below it keep the rest); the mesh view takes all the
         // width between the panel and that column, so no strip of the window is left unfilled.
@@ -112,6 +128,10 @@ pub struct Effect {
     pub export: Option<(Format, PathBuf)>,
     /// A stroke that could not be applied, for the status line.
     pub message: Option<String>,
+    /// The environment was turned: the renderer takes the turned map.
+    pub env_turned: bool,
+    /// The session's view settings (the turn, the backdrop) changed: they are saved.
+    pub session_changed: bool,
 }
 
 /// The orbit camera's starting elevation: the torus seen from a little above, as in the paper.
@@ -129,8 +149,14 @@ enum Drag {
     None,
     Stroke(Stroke),
     Orbit { last: (f64, f64) },
+    /// Shift-drag on the mesh view: the environment turns with the cursor.
+    TurnEnv { last: f64 },
     Light,
 }
+
+/// Degrees the environment turns per pixel of a Shift-drag: a drag across a 720-pixel view turns
+/// it about once around.
+pub const TURN_DEG_PER_PIXEL: f64 = 0.5;
 
 pub struct State {
     pub history: History,
@@ -160,6 +186,11 @@ pub struct State {
     pub exposure: f64,
     /// The last session's unsaved material, offered back until restored (R) or replaced.
     pub recovered: Option<Material>,
+    /// The environment's turn about the up axis (degrees, in [0, 360)).
+    pub env_rotation: f64,
+    /// What the mesh view shows behind the object.
+    pub backdrop: Backdrop,
+    shift: bool,
 }
 
 impl State {
@@ -189,6 +220,9 @@ impl State {
             log_graph: false,
             exposure: 1.0,
             recovered: None,
+            env_rotation: 0.0,
+            backdrop: Backdrop::default(),
+            shift: false,
         };
         state.refit();
         state
@@ -234,6 +268,11 @@ impl State {
                         self.pitch = (self.pitch + dy * 0.01).clamp(-1.5, 1.5);
                         fx.redraw = true;
                     }
+                    Drag::TurnEnv { last } => {
+                        let dx = x - *last;
+                        *last = x;
+                        return self.turn_env(dx * TURN_DEG_PER_PIXEL);
+                    }
                     Drag::Light => {
                         fx.redraw |= self.set_light_at(x, y);
                     }
@@ -246,6 +285,8 @@ impl State {
                 if self.layout.in_canvas(x, y) {
                     let (cu, cv) = self.layout.canvas_coords(x, y);
                     self.drag = Drag::Stroke(Stroke { brush: self.brush, points: vec![[cu, cv]], lobe: self.lobe });
+                } else if self.layout.in_mesh(x, y) && self.shift {
+                    self.drag = Drag::TurnEnv { last: x };
                 } else if self.layout.in_mesh(x, y) {
                     self.drag = Drag::Orbit { last: (x, y) };
                 }
@@ -327,6 +368,12 @@ impl State {
                 self.exposure = if up { self.exposure * 1.25 } else { self.exposure / 1.25 }.clamp(1e-4, 1e4);
                 fx.redraw = true;
             }
+            Input::Modifiers { .. }
+            | Input::TurnEnv(_)
+            | Input::ToggleBackdrop
+            | Input::BackdropBlur(_)
+            | Input::BackdropBrightness(_)
+            | Input::SetBackdrop(_) => return self.handle_view(input),
             Input::Restore => {
                 if let Some(m) = self.recovered.take() {
                     self.history.push(m);
@@ -337,6 +384,40 @@ impl State {
             }
         }
         fx
+    }
+
+    /// The inputs that change the session's view settings: the environment's turn and the backdrop.
+    fn handle_view(&mut self, input: Input) -> Effect {
+        let b = self.backdrop;
+        let backdrop = match input {
+            Input::Modifiers { shift } => {
+                self.shift = shift;
+                return Effect::default();
+            }
+            Input::TurnEnv(deg) => return self.turn_env(deg),
+            Input::ToggleBackdrop => Backdrop { shown: !b.shown, ..b },
+            Input::BackdropBlur(more) => Backdrop { blur: b.blur + if more { 0.5 } else { -0.5 }, ..b },
+            Input::BackdropBrightness(up) => Backdrop { brightness: b.brightness * if up { 1.25 } else { 0.8 }, ..b },
+            Input::SetBackdrop(new) => new,
+            _ => return Effect::default(),
+        };
+        self.backdrop = backdrop.clamped();
+        let shown = if self.backdrop.shown { "the map" } else { "black" };
+        self.status = format!(
+            "backdrop: {shown}, brightness ×{:.2}, blur {:.1} (of {}–{})",
+            self.backdrop.brightness, self.backdrop.blur, BLUR_RANGE.0, BLUR_RANGE.1
+        );
+        Effect { redraw: true, session_changed: self.backdrop != b, ..Effect::default() }
+    }
+
+    /// Turns the environment by `deg` degrees about the up axis.
+    fn turn_env(&mut self, deg: f64) -> Effect {
+        if !deg.is_finite() || deg == 0.0 {
+            return Effect::default();
+        }
+        self.env_rotation = (self.env_rotation + deg).rem_euclid(360.0);
+        self.status = format!("environment turned to {:.1}°", self.env_rotation);
+        Effect { redraw: true, env_turned: true, session_changed: true, ..Effect::default() }
     }
 
     /// Points the canvas light at the sphere normal under `(x, y)`; false off the sphere.

@@ -107,7 +107,12 @@ pub fn frame_stats_json(
 
 /// The mesh view and canvas of the last frame, for `--frame-stats`: where they are and what a
 /// headless `render` needs to reproduce them (`env_exposure`: the map's automatic exposure).
-pub fn views_json(state: &super::state::State, env_exposure: f64, spp: u32, refined: u32) -> serde_json::Value {
+pub fn views_json(
+    state: &super::state::State,
+    (env_exposure, env_backdrop): (f64, f64),
+    spp: u32,
+    refined: u32,
+) -> serde_json::Value {
     use serde_json::json;
     let l = state.layout;
     let c = state.camera();
@@ -116,7 +121,9 @@ pub fn views_json(state: &super::state::State, env_exposure: f64, spp: u32, refi
         "mesh": { "x": l.mesh_x, "width": l.mesh_w, "height": l.height,
                   "exposure": state.exposure * env_exposure,
                   "camera": format!("eye={} target={} up={} fov={}", v(c.eye), v(c.target), v(c.up), c.fov_deg),
-                  "spp": spp, "refined_spp": refined },
+                  "spp": spp, "refined_spp": refined,
+                  "env_rotation": state.env_rotation,
+                  "backdrop": { "brightness": state.backdrop.scale(env_backdrop), "blur": state.backdrop.blur } },
         "canvas": { "x": l.canvas_x, "side": l.canvas, "exposure": state.exposure,
                     "light": v(state.settings.canvas.light) },
     })

@@ -257,7 +257,7 @@ impl Gpu {
         let (now, was) = (&plan.placement, self.composed.as_ref());
         let parts = Parts {
             mesh: (plan.mesh.is_some() && mesh != Recorded::Waiting)
-                || was.is_none_or(|p| p.mesh_scale != now.mesh_scale),
+                || was.is_none_or(|p| (p.mesh_scale, p.backdrop_scale) != (now.mesh_scale, now.backdrop_scale)),
             canvas: plan.canvas.is_some()
                 || was.is_none_or(|p| (p.canvas_scale, p.marker) != (now.canvas_scale, now.marker)),
             all: was.is_none_or(|p| (p.mesh, p.canvas) != (now.mesh, now.canvas)),

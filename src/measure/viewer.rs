@@ -115,6 +115,8 @@ fn frames_of(
                     mesh: (l.mesh_x, l.mesh_w, l.height),
                     canvas: (l.canvas_x, l.canvas),
                     mesh_scale: 1.0,
+                    backdrop_scale: 1.0,
+                    summed: 1,
                     canvas_scale: 1.0,
                     marker: None,
                 };

@@ -60,8 +60,14 @@ pub struct Placement {
     pub mesh: (u32, u32, u32),
     /// The canvas's left edge and side.
     pub canvas: (u32, u32),
-    /// Linear scale of the mesh view (exposure over the number of summed samples) and of the canvas.
+    /// Linear scale of the mesh view's object (exposure over the number of summed samples) and of
+    /// the canvas.
     pub mesh_scale: f32,
+    /// Linear scale of the mesh view's backdrop (the pixels off the object, alpha 0): its own
+    /// brightness over the number of summed samples.
+    pub backdrop_scale: f32,
+    /// The samples the mesh view's image sums (1 for a frame's own image).
+    pub summed: u32,
     pub canvas_scale: f32,
     /// The snap marker's pixel, if shown.
     pub marker: Option<(f32, f32)>,
@@ -111,9 +117,14 @@ impl ComposePass {
             window_size: [window.width, window.height, p.mesh.2, p.marker.is_some() as u32],
             views: [p.mesh.0, p.mesh.1, p.canvas.0, p.canvas.1],
             scale: [p.mesh_scale, p.canvas_scale, mx, my],
-            background: [BACKGROUND[0] as f32 / 255.0, BACKGROUND[1] as f32 / 255.0, BACKGROUND[2] as f32 / 255.0, 1.0],
+            background: [
+                BACKGROUND[0] as f32 / 255.0,
+                BACKGROUND[1] as f32 / 255.0,
+                BACKGROUND[2] as f32 / 255.0,
+                p.backdrop_scale,
+            ],
             region: [0; 4],
-            sources: [mesh.width, mesh.height, canvas.width, 0],
+            sources: [mesh.width, mesh.height, canvas.width, p.summed.max(1)],
         };
         let rects = [
             (parts.mesh || parts.all, [p.mesh.0, 0, p.mesh.1, p.mesh.2]),

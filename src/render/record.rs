@@ -141,7 +141,7 @@ impl Renderer {
 
     /// Records, into the current frame, the composed window image `window`: the mesh view (the
     /// refinement's mean when refining, else its last frame) and the canvas placed as `placement`
-    /// says (its `mesh_scale` is multiplied by 1 / samples here).
+    /// says (its `mesh_scale` and `backdrop_scale` are multiplied by 1 / samples here).
     /// Only the `parts` that changed are written (`compose::Parts`); nothing when none did.
     pub fn record_compose(
         &mut self,
@@ -158,7 +158,12 @@ impl Renderer {
             return Err(Error::Validation("compose before both views were rendered".into()));
         };
         let (image, samples) = if self.refined > 0 { (&mesh.sum, self.refined) } else { (&mesh.accum, 1) };
-        let p = compose::Placement { mesh_scale: placement.mesh_scale / samples as f32, ..*placement };
+        let p = compose::Placement {
+            mesh_scale: placement.mesh_scale / samples as f32,
+            backdrop_scale: placement.backdrop_scale / samples as f32,
+            summed: samples,
+            ..*placement
+        };
         let passes = self.passes.as_ref().expect("passes live until drop");
         let ring = self.ring.as_mut().expect("ring lives until drop");
         let f = ring.current();

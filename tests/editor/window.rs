@@ -5,7 +5,8 @@ use super::*;
 
 /// The window shows what the headless renderer renders: the screenshot's mesh view and
 /// canvas equal `render` of the same views — size, camera, exposure and canvas light read from
-/// `--frame-stats`'s `views` — within 1 level of 255 per channel. Both run the same passes with the
+/// `--frame-stats`'s `views`, the backdrop's brightness and blur and the environment's turn
+/// included — within 1 level of 255 per channel. Both run the same passes with the
 /// same frame seed; what may differ is the sRGB encoding (the compose pass in f32 and the PNG writer
 /// in f64 can round a value within f32 error of a half level differently: one level). The snap
 /// marker's pixels (its colour exactly) are left out of the canvas.
@@ -16,6 +17,10 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let map = root.join("assets/hdri/studio.exr");
     let bin = env!("CARGO_BIN_EXE_brdf-shop");
+    // A kept session: the map turned and the backdrop brighter and blurred (what the render below
+    // must match).
+    let session = r#"{"env_rotation": 40.0, "backdrop": {"shown": true, "brightness": 1.5, "blur": 1.5}}"#;
+    std::fs::write(d("session.json"), session).unwrap();
     let run = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x720x24", bin, "edit", "--env"])
         .arg(&map)
@@ -31,6 +36,7 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
         // smallest step, and the screenshot is of the frame that settles the views at full size.
         .args(["--quit", "--size", "960x540", "--frame-budget", "1"])
         .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+        .env("BRDF_SHOP_SESSION", d("session.json"))
         .output()
         .expect("xvfb-run (tools/setup installs xvfb)");
     assert!(run.status.success(), "editor failed: {}", String::from_utf8_lossy(&run.stderr));
@@ -38,6 +44,7 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
     let (mesh, canvas) = (&doc["views"]["mesh"], &doc["views"]["canvas"]);
     let n = |v: &serde_json::Value| v.as_u64().unwrap() as u32;
     let (mx, mw, mh) = (n(&mesh["x"]), n(&mesh["width"]), n(&mesh["height"]));
+    assert_eq!((mesh["env_rotation"].as_f64(), mesh["backdrop"]["blur"].as_f64()), (Some(40.0), Some(1.5)));
     let (cx, side) = (n(&canvas["x"]), n(&canvas["side"]));
     let render = |out: &Path, args: &[String]| {
         let r = Command::new(bin)
@@ -66,6 +73,12 @@ fn screenshot_equals_the_headless_render_of_the_same_views() {
             mesh["camera"].as_str().unwrap().into(),
             "--exposure".into(),
             mesh["exposure"].to_string(),
+            "--env-rotation".into(),
+            mesh["env_rotation"].to_string(),
+            "--backdrop-brightness".into(),
+            mesh["backdrop"]["brightness"].to_string(),
+            "--backdrop-blur".into(),
+            mesh["backdrop"]["blur"].to_string(),
         ],
     );
     let canvas_img = render(
@@ -238,4 +251,56 @@ fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validat
     assert!(!stderr.contains("--minimise"), "{stderr}");
     let skipped = doc["skipped_minimised"].as_u64().unwrap();
     assert!((1..10).contains(&skipped), "redraws skipped while minimised: {skipped}");
+}
+
+/// The editor frames the whole mesh in its view at every window shape, and its layout fills the
+/// window: under Xvfb at 1280×720, 720×1280 and 1920×800, with the backdrop switched to black (a
+/// kept session), every pixel of the mesh view's border band (4 pixels wide) is black — no object
+/// pixel touches the view's edges — while the view holds the lit torus; and the panel, the mesh
+/// view and the canvas column fill the window's width exactly.
+#[test]
+fn the_mesh_is_framed_in_its_view_at_every_window_shape() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    std::fs::write(d("session.json"), r#"{"env_rotation": 0, "backdrop": {"shown": false, "brightness": 1, "blur": 0}}"#)
+        .unwrap();
+    let bin = env!("CARGO_BIN_EXE_brdf-shop");
+    for (w, h) in [(1280u32, 720u32), (720, 1280), (1920, 800)] {
+        let run = Command::new("xvfb-run")
+            .args(["-a", "-s", "-screen 0 1920x1280x24", bin, "edit", "--screenshot"])
+            .arg(d("shot.png"))
+            .arg("--frame-stats")
+            .arg(d("stats.json"))
+            .args(["--quit", "--size", &format!("{w}x{h}")])
+            .env("BRDF_SHOP_RECOVERY", d("recovery.brdf.json"))
+            .env("BRDF_SHOP_SESSION", d("session.json"))
+            .output()
+            .expect("xvfb-run (tools/setup installs xvfb)");
+        assert!(run.status.success(), "{w}x{h}: {}", String::from_utf8_lossy(&run.stderr));
+        let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d("stats.json")).unwrap()).unwrap();
+        let (mesh, canvas) = (&doc["views"]["mesh"], &doc["views"]["canvas"]);
+        let n = |v: &serde_json::Value| v.as_u64().unwrap() as u32;
+        let (mx, mw, mh) = (n(&mesh["x"]), n(&mesh["width"]), n(&mesh["height"]));
+        let shot = image::open(d("shot.png")).unwrap().to_rgba8();
+        assert_eq!(shot.dimensions(), (w, h));
+        assert_eq!((mh, n(&canvas["x"]) + n(&canvas["side"])), (h, w), "{w}x{h}: the layout leaves a strip");
+        assert_eq!(mx + mw, n(&canvas["x"]));
+        const BAND: u32 = 4;
+        let lit = |x: u32, y: u32| shot.get_pixel(mx + x, y).0[..3].iter().any(|&c| c > 0);
+        let (mut lo, mut hi) = ((mw, mh), (0, 0));
+        for y in 0..mh {
+            for x in 0..mw {
+                let border = x < BAND || y < BAND || x >= mw - BAND || y >= mh - BAND;
+                if lit(x, y) {
+                    assert!(!border, "{w}x{h}: an object pixel at ({x}, {y}) of the {mw}x{mh} mesh view's border");
+                    (lo, hi) = ((lo.0.min(x), lo.1.min(y)), (hi.0.max(x), hi.1.max(y)));
+                }
+            }
+        }
+        // Framed, not lost: the torus's outer rim (its bounding sphere's equator) spans about
+        // 1 / FRAME_MARGIN = 80 % of the view's narrower extent across the image; more than half
+        // of it, so the check is not vacuous.
+        let span = hi.0.saturating_sub(lo.0).max(hi.1.saturating_sub(lo.1));
+        assert!(2 * span > mw.min(mh), "{w}x{h}: the object spans {span} of {}", mw.min(mh));
+    }
 }
