@@ -1,6 +1,7 @@
-//! The headless main job (until the editor lands): paints the embedded default strokes onto the
-//! scratch material and writes `material.brdf.json`, `canvas.png` (the CPU canvas, 512²) and
-//! `check.txt` (the energy report) into a folder.
+//! The headless main job: paints the embedded default strokes onto the scratch material and writes
+//! into a folder `mesh.png` (the material on the torus under the studio map, with the map behind it
+//! as the editor shows it: rendered on the GPU), `canvas.png` (the CPU canvas, 512²),
+//! `material.brdf.json` and `check.txt` (the energy report), then says what to run next.
 
 use std::path::Path;
 
@@ -29,11 +30,59 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         .context("encoding canvas.png")?;
     brdf_shop::fsio::write_atomic(&out.join("canvas.png"), &png)?;
 
+    let mesh_png = render_mesh(&m)?;
+    brdf_shop::fsio::write_atomic(&out.join("mesh.png"), &mesh_png)?;
+
     let (samples, pairs) = (20_000, 200_000);
     let report = Report::measure(&m, samples, pairs);
     let text = super::check::report_text(&m, &report, samples, pairs);
     brdf_shop::fsio::write_atomic(&out.join("check.txt"), text.as_bytes())?;
     print!("{text}");
-    println!("wrote {0}/material.brdf.json, {0}/canvas.png, {0}/check.txt", brdf_shop::fsio::show(out));
+    println!("wrote {0}/mesh.png, {0}/canvas.png, {0}/material.brdf.json, {0}/check.txt", brdf_shop::fsio::show(out));
+    println!(
+        "next: `brdf-shop edit` paints it in the editor (needs a display); `brdf-shop render --material {}/material.brdf.json --env assets/hdri/studio.exr --out m.png` renders it",
+        brdf_shop::fsio::show(out)
+    );
     Ok(())
+}
+
+/// The side lengths of `mesh.png`.
+const MESH_SIZE: (u32, u32) = (800, 600);
+
+/// `m` on the torus under the embedded studio map, seen as the editor first shows it (the orbit's
+/// start, framed; the map's mean at mid grey on the object, its median at mid grey behind it, two
+/// levels down its mip chain), `key` at 32 samples per lobe, as PNG bytes.
+fn render_mesh(m: &Material) -> anyhow::Result<Vec<u8>> {
+    use brdf_shop::editor::{backdrop, lighting, state};
+    use brdf_shop::render::{Estimator, Renderer, Settings, View};
+    let env = brdf_shop::measure::embedded_environment()?;
+    let (w, h) = MESH_SIZE;
+    let distance = brdf_shop::scene::camera::fit_distance(30.0, w as f64 / h as f64, 1.0, state::FRAME_MARGIN);
+    let pitch = state::DEFAULT_PITCH;
+    let eye = glam::DVec3::new(0.0, pitch.sin(), pitch.cos()) * distance;
+    let camera = brdf_shop::scene::Camera { eye, ..Default::default() };
+    let look = backdrop::Backdrop::default();
+    let mut renderer = Renderer::new(brdf_shop::vk::Context::from_env()?)?;
+    renderer.set_environment(&env)?;
+    renderer.set_mesh(&brdf_shop::scene::Mesh::torus())?;
+    let settings = Settings {
+        width: w,
+        height: h,
+        spp: 32,
+        estimator: Estimator::Key,
+        view: View::Mesh,
+        light: lighting::light_from(&lighting::EnvSummary::of(&env), &camera),
+        camera,
+        intensity: 1.0,
+        backdrop_blur: look.blur,
+    };
+    let mut image = renderer.render(m, &settings)?.image;
+    let brightness = look.scale(backdrop::auto_brightness(&env));
+    for p in image.pixels.iter_mut().filter(|p| p[3] < 0.5) {
+        for c in &mut p[..3] {
+            *c = (*c as f64 * brightness) as f32;
+        }
+    }
+    let exposure = lighting::auto_exposure(&env);
+    Ok(brdf_shop::imageio::encode_view(std::path::Path::new("mesh.png"), w, h, &image.pixels, exposure, 1.0)?)
 }
