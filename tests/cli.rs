@@ -553,14 +553,27 @@ fn check_json() {
 // ---------------------------------------------------------------------------------------------------
 // `demo` (the headless main job).
 
+/// The demo writes the material on the mesh (GPU, 800 × 600: the torus in the middle, the studio's
+/// room behind it — neither black nor blown out), the canvas, the material and the report, and its
+/// last line says what to run next.
 #[test]
-fn demo_writes_its_three_files() {
+fn demo_writes_the_mesh_the_canvas_the_material_and_the_report() {
     let dir = tmp();
     let out = dir.path().join("demo");
     let (code, stdout, stderr) = brdf_shop(&["demo", "--out", s(&out)], None);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("reciprocity"), "{stdout}");
-    assert_eq!(listing(&out), ["canvas.png", "check.txt", "material.brdf.json"]);
+    assert_eq!(listing(&out), ["canvas.png", "check.txt", "material.brdf.json", "mesh.png"]);
+    let last = stdout.lines().last().unwrap_or_default();
+    assert!(last.starts_with("next: ") && last.contains("brdf-shop edit"), "{stdout}");
+    let mesh = image::open(out.join("mesh.png")).expect("mesh.png is an image").to_rgb8();
+    assert_eq!(mesh.dimensions(), (800, 600));
+    // The backdrop (a corner) shows the room at its median, about mid grey (0.18 linear is 118 of
+    // 255 in sRGB): between 40 and 220 in every channel. The centre column crosses the torus.
+    let corner = mesh.get_pixel(5, 5).0;
+    assert!(corner.iter().all(|&c| (40..=220).contains(&c)), "backdrop {corner:?}");
+    let column: std::collections::HashSet<[u8; 3]> = (0..600).map(|y| mesh.get_pixel(400, y).0).collect();
+    assert!(column.len() > 50, "the middle column has {} colours: no object?", column.len());
     let m = Material::load(&out.join("material.brdf.json")).expect("the demo material loads");
     assert!(!m.lobes.is_empty());
     let png = std::fs::read(out.join("canvas.png")).unwrap();
