@@ -243,13 +243,13 @@ pub fn spread(img: &image::RgbaImage, (x0, y0, w, h): (u32, u32, u32, u32)) -> f
     (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
 }
 
-/// The Python of a virtual environment tools/setup makes in the cargo target folder
+/// The Python of a virtual environment `tools/setup --exports` makes in the cargo target folder
 /// (`<target>/<venv>/bin/python3`, `<target>` being the parent of `CARGO_TARGET_TMPDIR`); a missing
-/// one fails the test, naming what tools/setup installs there.
+/// one fails the test, naming what `tools/setup --exports` installs there.
 pub fn venv_python(venv: &str, what: &str) -> PathBuf {
     let target = Path::new(env!("CARGO_TARGET_TMPDIR")).parent().unwrap().to_path_buf();
     let p = target.join(venv).join("bin/python3");
-    assert!(p.exists(), "{} missing: run tools/setup (it installs {what} there)", p.display());
+    assert!(p.exists(), "{} missing: run tools/setup --exports (it installs {what} there)", p.display());
     p
 }
 
