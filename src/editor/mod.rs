@@ -63,6 +63,9 @@ struct App {
     session: backdrop::Session,
     /// Whether the warning that the session file cannot be written was printed.
     session_warned: bool,
+    /// The environment was turned since the last frame: the next frame gives the renderer the
+    /// turned map.
+    env_turn_pending: bool,
     mesh: Mesh,
     /// Changes when the environment or the mesh is replaced.
     scene_generation: u64,
@@ -253,10 +256,8 @@ impl App {
     fn handle(&mut self, input: Input) -> Result<()> {
         let Some(state) = self.state.as_mut() else { return Ok(()) };
         let fx = state.handle(input);
-        if fx.env_turned {
-            let rotation = state.env_rotation;
-            self.set_env(rotation)?;
-        }
+        // The turned map is made once per frame, however many cursor moves a frame's drag holds.
+        self.env_turn_pending |= fx.env_turned;
         if fx.session_changed {
             self.keep_session();
         }
@@ -381,6 +382,10 @@ impl App {
             return Ok(());
         }
         let start = std::time::Instant::now();
+        if std::mem::take(&mut self.env_turn_pending) {
+            let rotation = self.state.as_ref().map_or(0.0, |s| s.env_rotation);
+            self.set_env(rotation)?;
+        }
         let drawn = self.draw_frame()?;
         let Some(drawn) = drawn else { return Ok(()) };
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -543,6 +548,7 @@ pub fn run(opts: Options) -> Result<()> {
         env_backdrop: backdrop::auto_brightness(&env),
         session,
         session_warned: false,
+        env_turn_pending: false,
         env,
         mesh,
         scene_generation: 0,
