@@ -166,8 +166,12 @@ fn the_goal_row_at_the_control_size_counts_in_the_verdict() {
 }
 
 /// Error trends on the quick sweep: `plain` and `mis` converge (the error at the most samples is
-/// below a third of the error at one sample per pixel — QMC on these scenes falls faster than
-/// 1/√N, which would give 1/√128 ≈ 0.09), and `key` improves to within 2 % relative L1; on the sun
+/// below a third of the error at one sample per pixel), and `mis` at the Monte Carlo rate: below
+/// twice 1/√(128/1) ≈ 0.088 of it, the factor 2 for the spread of the two errors, each measured on
+/// one 32² frame (measured: 0.023–0.059). `plain` is held to the third alone: it samples the BRDF
+/// only, and on studio's small lamps its 1-spp error is a few rare hits, far from the asymptotic
+/// rate at these counts (measured: 0.16–0.24 on studio's medium, rough and painted anisotropic
+/// lobes, 0.02–0.09 elsewhere). `key` improves to within 2 % relative L1; on the sun
 /// map, `fis` at 8 spp beats `plain` at 8 spp on the medium and rough lobes; `key` is within the
 /// frontier goal's 8 % at 8 spp on every scene and, for the rough lobe, at 1 spp. Also writes and
 /// checks the CSV, plot and summary.
@@ -201,7 +205,12 @@ fn error_vs_time_quick_trends() {
         for mat in &plan.materials {
             for e in [Estimator::Plain, Estimator::Mis] {
                 let (a, b) = (err(env, mat, e, first), err(env, mat, e, last));
+                eprintln!("{env} {mat} {}: {a:.4} at {first} spp, {b:.4} at {last}: ratio {:.3}", e.name(), b / a);
                 assert!(b < a / 3.0, "{env} {mat} {}: {a} at {first} spp, {b} at {last}", e.name());
+                let mc_rate = (first as f64 / last as f64).sqrt();
+                if e == Estimator::Mis {
+                    assert!(b < 2.0 * mc_rate * a, "{env} {mat} mis: {a} at {first} spp, {b} at {last}");
+                }
             }
             // `key` can start near its floor (studio's sharp lobe as the lamp's points: 0.023 at
             // 1 spp), so it must improve and reach 2 % instead; the painted reciprocal materials 3 %
@@ -256,13 +265,18 @@ fn error_vs_time_quick_trends() {
         eprintln!("studio {mat}: fis 8 spp {f:.4}, plain 8 spp {p:.4}");
         assert!(f < p, "studio {mat}: fis {f} not below plain {p} at 8 spp");
     }
-    // The cache: a second run reads the references instead of recomputing them.
+    // The cache holds one entry a scene; that a run reads an entry back (and computes an unusable
+    // one again) is tested where it can fail alone: `measure::reference_cache`'s unit test, and
+    // `tests/hostile/own_files.rs` through the binary.
     let cached = std::fs::read_dir(dir.path().join("cache")).unwrap().count();
     assert_eq!(cached, plan.envs.len() * plan.materials.len());
 }
 
 /// `fis` at 8 spp on the quick sweep (lavapipe, Mesa 22.3, 32²), as `report error-vs-time --quick`
-/// writes them (`rel_l1` of its CSV).
+/// writes them (`rel_l1` of its CSV). A snapshot of this code's own output, not an independent
+/// bound: it fails when the paper's estimator renders anything else (a regression check); the
+/// independent checks of the estimators are the bounds above (convergence, `key` below `fis`, the
+/// 8 % goal, `fis` below `plain`).
 const FIS_AT_8: [(&str, &str, f64); 6] = [
     ("studio.exr", "sharp-ward", 0.316382),
     ("studio.exr", "medium-gm", 0.777872),
