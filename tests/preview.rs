@@ -79,8 +79,16 @@ fn a_preview_is_magnified_bilinearly_into_its_place() {
     )
     .unwrap();
     let exposure = 0.8f32;
-    let placement =
-        Placement { mesh: (0, w, h), canvas: (w, place), mesh_scale: exposure, canvas_scale: 1.0, marker: None };
+    // The backdrop at the object's scale: the whole view is one linear scale of the preview.
+    let placement = Placement {
+        mesh: (0, w, h),
+        canvas: (w, place),
+        mesh_scale: exposure,
+        backdrop_scale: exposure,
+        summed: 1,
+        canvas_scale: 1.0,
+        marker: None,
+    };
     r.record_compose(&window, &placement, Parts { mesh: true, canvas: true, all: true }).unwrap();
     let buffer = readback::buffer_for(&r.ctx, &window).unwrap();
     let cmd = r.frame_commands().0;
