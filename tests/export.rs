@@ -171,6 +171,239 @@ fn glsl_export_is_the_renderers_model_source() {
     assert!(!text.lines().any(|l| l.trim_start().starts_with("#include")), "the export has an #include");
 }
 
+/// The grazing cut-off of docs/model.md (Frames and conventions, The horizon), written out here so
+/// that a change to the model's constant fails the test below: `2⁻²⁰`.
+const GRAZING_COS: f64 = 9.5367431640625e-7;
+
+/// Heights above (and on) the horizon, to the last bit: far under the cut-off (1e-300, 1e-30, 1e-8,
+/// the subnormals 5e-324, 1e-310 and the largest one, −0 and 0), just under and over it (½ and 2 ×
+/// [`GRAZING_COS`]) and well over it (1e-4).
+const GRAZING_Z: [f64; 12] = [
+    1e-300,
+    1e-30,
+    1e-8,
+    1e-4,
+    5e-324,
+    1e-310,
+    2.225073858507201e-308,
+    -0.0,
+    0.0,
+    0.5 * GRAZING_COS,
+    2.0 * GRAZING_COS,
+    1e-6,
+];
+
+/// Each height of [`GRAZING_Z`] as ω_i, ω_o or both, normalised in `f64`: mirror pairs in two
+/// azimuths, the retro-reflection, crossed azimuths, one grazing direction against the normal or a
+/// 45° one; then views `(0.6, ±y, 0.8)` that the 120° rotation about (1, 1, 1) of
+/// [`horizon_view_material`] turns onto the horizon (its rotated view has height `±y` plus the
+/// rotation's rounding), for the heights more than 10× from the cut-off: in `f32` a rotated view's
+/// height is known to ~1e-7 absolute, so one near the cut-off may fall on either side.
+fn grazing_pairs() -> Vec<(DVec3, DVec3)> {
+    let mut out = Vec::new();
+    let d = |x: f64, y: f64, z: f64| DVec3::new(x, y, z).normalize();
+    for &z in &GRAZING_Z {
+        out.push((d(1.0, 0.0, z), d(-1.0, 0.0, z)));
+        out.push((d(0.6, 0.8, z), d(-0.6, -0.8, z)));
+        out.push((d(1.0, 0.0, z), d(1.0, 0.0, z)));
+        out.push((d(1.0, 0.0, z), d(0.0, 1.0, z)));
+        out.push((d(1.0, 0.0, z), d(0.0, 0.0, 1.0)));
+        out.push((d(0.0, 0.0, 1.0), d(-1.0, 0.0, z)));
+        out.push((d(0.5, -0.5, 0.7), d(0.3, 0.9, z)));
+        if (0.1 * GRAZING_COS..10.0 * GRAZING_COS).contains(&z.abs()) {
+            continue;
+        }
+        for y in [z, -z] {
+            out.push((d(0.0, 0.0, 1.0), d(0.6, y, 0.8)));
+            out.push((d(-0.5, -0.4, 0.7), d(0.6, y, 0.8)));
+        }
+    }
+    out
+}
+
+/// Directions on the cut-off to the last bit, paired with an ordinary one (as ω_i and as ω_o): for
+/// three azimuths and three scales (unnormalised; 1e-300 puts every component far under the cut-off
+/// before normalisation), the height whose normalised cosine (the model's `unit`) first reaches
+/// [`GRAZING_COS`], found one ulp at a time, and the four heights on either side of it. For the two
+/// `f64` evaluators, which normalise with the same operations: the `f32` GLSL takes unit vectors
+/// rounded to `f32`, which moves a cosine by far more than these steps.
+fn cut_off_pairs() -> Vec<(DVec3, DVec3)> {
+    let unit = |v: DVec3| brdf_shop::brdf::material::unit(v).expect("a non-zero direction");
+    let step = |z: f64, k: i64| f64::from_bits((z.to_bits() as i64 + k) as u64);
+    let other = DVec3::new(-0.3, 0.1, 0.9);
+    let mut out = Vec::new();
+    for (x, y) in [(1.0, 0.0), (0.6, 0.8), (-0.28, 0.96)] {
+        for scale in [1.0, 3.0, 1e-300] {
+            let v = |z: f64| DVec3::new(x, y, z) * scale;
+            // From the cut-off itself, whose normalised cosine is about 2¹¹ ulp under it (the
+            // length exceeds 1 by c_min²/2 = 2⁻⁴¹ relative): down while at or over, then up while
+            // under.
+            let mut z = GRAZING_COS;
+            while unit(v(z)).z >= GRAZING_COS {
+                z = step(z, -1);
+            }
+            while unit(v(z)).z < GRAZING_COS {
+                z = step(z, 1);
+            }
+            for k in -4..=4 {
+                out.push((v(step(z, k)), other));
+                out.push((other, v(step(z, k))));
+            }
+        }
+    }
+    out
+}
+
+/// A paper-model Ward lobe rotated 120° about (1, 1, 1) (`x → y → z → x`, exact in the quaternion),
+/// so the rotated view of `ω_o = (0.6, y, 0.8)` is `(0.8, 0.6, y)` up to the rotation's rounding.
+fn horizon_view_material() -> Material {
+    let lobe = Lobe { rotation: glam::DQuat::from_xyzw(0.5, 0.5, 0.5, 0.5), ..common::lobe(0.5, 0.3, 0.3) };
+    Material {
+        diffuse: [0.2, 0.3, 0.4],
+        normalization: brdf_shop::brdf::Normalization::Ward,
+        lobes: vec![lobe],
+        ..Material::scratch()
+    }
+}
+
+/// `brdf-shop eval --material M` on `pairs`: one RGB line per pair.
+fn eval_binary(material: &Path, pairs: &[(DVec3, DVec3)]) -> Vec<[f64; 3]> {
+    use std::io::Write;
+    let text: String =
+        pairs.iter().map(|(a, b)| format!("{:?} {:?} {:?} {:?} {:?} {:?}\n", a.x, a.y, a.z, b.x, b.y, b.z)).collect();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(["eval", "--material"])
+        .arg(material)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("brdf-shop eval starts");
+    child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "eval: {}", String::from_utf8_lossy(&out.stderr));
+    let lines: Vec<[f64; 3]> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v: Vec<f64> =
+                l.split(' ').map(|x| x.parse().unwrap_or_else(|_| panic!("eval printed {l:?}"))).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    assert_eq!(lines.len(), pairs.len(), "eval: one line per pair");
+    lines
+}
+
+/// The exported Mitsuba plug-in's module-level `brdf_eval` (`f64`, Dr.Jit's LLVM backend) on
+/// `pairs`, through the virtual environment tools/setup makes.
+fn plugin_brdf_eval(dir: &Path, material: &Path, pairs: &[(DVec3, DVec3)]) -> Vec<[f64; 3]> {
+    let plugin = dir.join("grazing-plugin.py");
+    common::export("mitsuba", material, &plugin);
+    let pairs_file = dir.join("grazing-pairs.txt");
+    let text: String =
+        pairs.iter().map(|(a, b)| format!("{:?} {:?} {:?} {:?} {:?} {:?}\n", a.x, a.y, a.z, b.x, b.y, b.z)).collect();
+    std::fs::write(&pairs_file, text).unwrap();
+    let script = "import importlib.util, sys
+import mitsuba as mi
+mi.set_variant('llvm_ad_rgb')
+spec = importlib.util.spec_from_file_location('p', sys.argv[1])
+p = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(p)
+rows = [[float(v) for v in line.split()] for line in open(sys.argv[2]) if line.strip()]
+col = lambda k: mi.Float64([r[k] for r in rows])
+f = p.brdf_eval((col(0), col(1), col(2)), (col(3), col(4), col(5)))
+cols = [[float(v) for v in c] for c in f]
+for i in range(len(rows)):
+    print(repr(cols[0][i]), repr(cols[1][i]), repr(cols[2][i]))
+";
+    let python = common::venv_python("mitsuba-venv", "Mitsuba 3");
+    let out = Command::new(python).arg("-c").arg(script).arg(&plugin).arg(&pairs_file).output().unwrap();
+    assert!(out.status.success(), "plug-in: {}", String::from_utf8_lossy(&out.stderr));
+    let lines: Vec<[f64; 3]> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    assert_eq!(lines.len(), pairs.len(), "plug-in: one line per pair");
+    lines
+}
+
+/// Tolerance of the plug-in's `brdf_eval` against `eval`, both `f64`: the same formulas in the same
+/// order, so what differs is Dr.Jit's `exp`/`log` against Rust's (a few ulp each) on exponents of at
+/// most ~60 nats here: ≤ 1e-13 relative. 1e-12 leaves a margin; a cut-off or saturation applied
+/// differently shows as O(1) (the 2.3× of a pair 1e-300 above the horizon).
+const GRAZING_PLUGIN_TOLERANCE: f64 = 1e-12;
+
+/// Grazing to the last bit (docs/model.md, Frames and conventions, The horizon): `brdf-shop eval`,
+/// the Mitsuba plug-in's `brdf_eval` and the exported GLSL's `material_eval` give the same answer on
+/// [`grazing_pairs`] (and eval and the plug-in on [`cut_off_pairs`]) for every export material (both
+/// paper normalisations, symmetrised, rotated and split lobes, the reciprocal model) and a lobe whose
+/// rotated view lies on the horizon. Where the normalised cosine of ω_i or ω_o is under
+/// [`GRAZING_COS`] all of them return exactly 0. Elsewhere the plug-in agrees to
+/// [`GRAZING_PLUGIN_TOLERANCE`] and the GLSL (`f32`, fed each pair rounded to `f32`) to
+/// [`F32_TOLERANCE`] relative, on the value itself: over the cut-off no value leaves `f32`'s range,
+/// the mirror pairs cancel exactly in `f32`, and the inputs' rounding (6e-8 relative, ~1e-7
+/// absolute in a rotated view's height, which the 120° lobe's rotated views of height 1e-4 turn
+/// into ~5e-4) stays under it.
+#[test]
+fn grazing_pairs_give_one_answer_in_eval_the_plugin_and_the_glsl_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let ctx = device();
+    let pairs = grazing_pairs();
+    let f64_pairs: Vec<_> = pairs.iter().copied().chain(cut_off_pairs()).collect();
+    let mut materials = common::export_materials(dir.path());
+    let horizon = dir.path().join("horizon-view.brdf.json");
+    horizon_view_material().save(&horizon).unwrap();
+    materials.push(("horizon-view-ward".into(), horizon));
+    let below = |v: DVec3| !(brdf_shop::brdf::material::unit(v).is_some_and(|u| u.z >= GRAZING_COS));
+    let (mut zeros, mut compared) = (0usize, 0usize);
+    for (name, path) in &materials {
+        let m = Material::load(path).unwrap();
+        let eval = eval_binary(path, &f64_pairs);
+        let plugin = plugin_brdf_eval(dir.path(), path, &f64_pairs);
+        let text = export(path, "glsl", &dir.path().join(format!("{name}.glsl")));
+        let src = compute_wrapper(&text, "material_eval(wi, wo)");
+        let spv = glslc(&src, dir.path(), &format!("{name}-grazing.comp"), &["--target-env=vulkan1.3", "-O"])
+            .unwrap_or_else(|e| panic!("{name}: the exported GLSL does not compile:\n{e}"));
+        let glsl = gpu_values(&ctx, &spv, name, &m, &pairs);
+        let (mut worst_plugin, mut worst_glsl) = (0.0f64, 0.0f64);
+        for (k, (wi, wo)) in f64_pairs.iter().enumerate() {
+            let what = format!("{name}: ω_i {wi:?}, ω_o {wo:?}");
+            // The GLSL's value where it has one (the grazing pairs), else eval's.
+            let (f, p) = (eval[k], plugin[k]);
+            let g = glsl.get(k).map_or(f, |g| g.map(f64::from));
+            if below(*wi) || below(*wo) {
+                assert!(
+                    f == [0.0; 3] && p == [0.0; 3] && g == [0.0; 3],
+                    "{what}: under the cut-off, yet eval {f:?}, plug-in {p:?}, GLSL {g:?}"
+                );
+                zeros += 1;
+                continue;
+            }
+            for c in 0..3 {
+                assert!(f[c] > 0.0 && f[c].is_finite(), "{what}: eval {f:?}");
+                let ep = (p[c] - f[c]).abs() / f[c];
+                let eg = (g[c] - f[c]).abs() / f[c];
+                assert!(ep <= GRAZING_PLUGIN_TOLERANCE, "{what}: plug-in {p:?} against eval {f:?} ({ep:.2e})");
+                assert!(eg <= F32_TOLERANCE, "{what}: GLSL {g:?} against eval {f:?} ({eg:.2e})");
+                worst_plugin = worst_plugin.max(ep);
+                worst_glsl = worst_glsl.max(eg);
+            }
+            compared += 1;
+        }
+        println!("grazing {name:28} plug-in worst {worst_plugin:.1e}, GLSL worst {worst_glsl:.1e}");
+    }
+    // Both sides of the cut-off are exercised, the last bit included.
+    assert!(zeros > 500 && compared > 200, "{zeros} pairs under the cut-off, {compared} over it");
+    let cut = cut_off_pairs();
+    let under = cut.iter().filter(|(a, b)| below(*a) || below(*b)).count();
+    assert!(under > 0 && under < cut.len(), "{under} of the {} pairs on the cut-off under it", cut.len());
+}
+
 /// A BRDF Explorer parameter as its loader reads it.
 enum Param {
     Float(String, f32),

@@ -17,6 +17,7 @@ use std::process::{Command, Stdio};
 
 use brdf_shop::brdf::Material;
 use brdf_shop::brush::strokes::Strokes;
+use brdf_shop::fsio::shortest;
 use brdf_shop::scene::{Environment, Mesh};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -125,12 +126,14 @@ fn mutated(seed: Vec<u8>) -> impl Strategy<Value = Vec<u8>> {
 }
 
 /// The property every parser must keep: no panic (the call returns), and a refusal is a user error
-/// whose message is one line.
+/// whose message is exactly one line: something besides white space, and no line break (`\n`, or a
+/// `\r` that a terminal shows as one) anywhere in it, a trailing one included.
 fn refused_cleanly<T>(r: brdf_shop::Result<T>) -> Result<(), TestCaseError> {
     if let Err(e) = r {
         prop_assert!(e.is_user_error(), "not a user error: {e}");
         let msg = e.to_string();
-        prop_assert!(!msg.is_empty(), "an empty message");
+        prop_assert!(!msg.trim().is_empty(), "an empty message: {:?}", msg);
+        prop_assert!(!msg.contains(['\n', '\r']), "not one line: {:?}", msg);
     }
     Ok(())
 }
@@ -488,8 +491,9 @@ proptest! {
     }
 }
 
-/// `eval` through the binary: exit 0 with one output line per input line, or exit 1 with one
-/// stderr line and nothing on stdout.
+/// `eval` through the binary: exit 0 with one output line per input line (the library's value of
+/// each, [`eval_printed_one_line_per_input_line`]) and nothing on stderr, or exit 1 with one stderr
+/// line and nothing on stdout.
 fn eval_run(material: &Path, input: &[u8]) -> Result<(), TestCaseError> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
         .args(["eval", "--material"])
@@ -509,7 +513,10 @@ fn eval_run(material: &Path, input: &[u8]) -> Result<(), TestCaseError> {
     let stderr = String::from_utf8_lossy(&out.stderr);
     prop_assert!(!stderr.contains("panicked"), "{}", stderr);
     match out.status.code() {
-        Some(0) => prop_assert!(stderr.is_empty(), "{}", stderr),
+        Some(0) => {
+            prop_assert!(stderr.is_empty(), "{}", stderr);
+            eval_printed_one_line_per_input_line(material, input, &out.stdout)?;
+        }
         Some(1) => {
             prop_assert!(out.stdout.is_empty(), "partial output on a refusal");
             prop_assert_eq!(stderr.lines().count(), 1, "{}", stderr);
@@ -517,6 +524,36 @@ fn eval_run(material: &Path, input: &[u8]) -> Result<(), TestCaseError> {
         }
         other => prop_assert!(false, "exit status {:?}: {}", other, stderr),
     }
+    Ok(())
+}
+
+/// `eval`'s success: the input's lines (split at `\n`, one trailing `\r` dropped, blank ones
+/// skipped, as `eval` reads them) each give exactly one output line, in order, holding
+/// `f(ω_i, ω_o)` of that line's six numbers as the library evaluates it
+/// (`brdf_shop::fsio::shortest` of each channel), and stdout ends in a line break.
+fn eval_printed_one_line_per_input_line(material: &Path, input: &[u8], stdout: &[u8]) -> Result<(), TestCaseError> {
+    let m = Material::load(material).expect("the fuzzed material loads");
+    let mut want = String::new();
+    let mut lines = input.split(|&b| b == b'\n').collect::<Vec<_>>();
+    if lines.last().is_some_and(|l| l.is_empty()) {
+        lines.pop();
+    }
+    for line in lines {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        let Ok(text) = std::str::from_utf8(line) else {
+            return Err(TestCaseError::fail(format!("exit 0 on a line that is not UTF-8: {line:?}")));
+        };
+        if text.trim().is_empty() {
+            continue;
+        }
+        let v: Vec<f64> = text.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+        prop_assert_eq!(v.len(), 6, "exit 0 on the line {:?}", text);
+        let f = m.eval(glam::DVec3::new(v[0], v[1], v[2]), glam::DVec3::new(v[3], v[4], v[5]));
+        want += &format!("{} {} {}\n", shortest(f[0]), shortest(f[1]), shortest(f[2]));
+    }
+    let got = String::from_utf8_lossy(stdout);
+    prop_assert_eq!(got.lines().count(), want.lines().count(), "output lines against input lines: {:?}", got);
+    prop_assert_eq!(got, want);
     Ok(())
 }
 

@@ -2,8 +2,10 @@
 //! "## A first material", line by line, through `sh -c` in a fresh temporary folder whose `assets`
 //! is a link to the repository's, with the directory of the binary under test first on `PATH` (so
 //! `brdf-shop` is this build). Every line must exit 0, and every file a line names with `--out` must
-//! exist and hold something. The block must be there, and must run `brdf-shop` at least once.
-//! Debug builds run the binary with the validation layer, whose errors fail a GPU command.
+//! exist and hold something; images must decode (PNG, EXR) at the line's `--size`. What the README
+//! says a command prints must be printed ([`check_promises`]). The block must be there, and must run
+//! `brdf-shop` at least once. Debug builds run the binary with the validation layer, whose errors
+//! fail a GPU command.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -72,18 +74,104 @@ fn outputs(line: &str) -> Vec<String> {
     out
 }
 
-/// Runs `line` with `sh -c` in `dir` with `path` as `PATH`; returns its exit status and output, or
-/// fails the test when it runs past [`LINE_LIMIT`] (the child is killed first).
-fn run(line: &str, dir: &Path, path: &str) -> (std::process::ExitStatus, String) {
+/// The `WxH` a line asks for with `--size WxH`, if it does.
+fn size(line: &str) -> Option<(u32, u32)> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let at = words.iter().position(|w| *w == "--size")?;
+    let (w, h) = words.get(at + 1)?.split_once('x')?;
+    Some((w.parse().ok()?, h.parse().ok()?))
+}
+
+/// Width and height of the image at `file` (`.png` through `image`, `.exr` through `exr`), decoded
+/// whole: a file that does not decode fails the test. EXR pixels must be finite (the renderers write
+/// radiance beyond `f32` as ±`f32::MAX`) with alpha 0 or 1 (docs/model.md: coverage of the pixel
+/// centre). `None` for other files.
+fn decoded_size(file: &Path) -> Option<(u32, u32)> {
+    let name = file.display();
+    match file.extension()?.to_str()? {
+        "png" => {
+            let img = image::open(file).unwrap_or_else(|e| panic!("{name} does not decode as PNG: {e}"));
+            Some((img.width(), img.height()))
+        }
+        "exr" => {
+            use exr::prelude::*;
+            let img = read_first_rgba_layer_from_file(
+                file,
+                |res, _| (res.width(), res.height(), Vec::with_capacity(res.width() * res.height())),
+                |px: &mut (usize, usize, Vec<[f32; 4]>), _, (r, g, b, a): (f32, f32, f32, f32)| px.2.push([r, g, b, a]),
+            )
+            .unwrap_or_else(|e| panic!("{name} does not decode as EXR: {e}"));
+            let (w, h, pixels) = img.layer_data.channel_data.pixels;
+            assert_eq!(pixels.len(), w * h, "{name}: {} pixels for {w}x{h}", pixels.len());
+            assert!(pixels.iter().flatten().all(|v| v.is_finite()), "{name}: a non-finite value");
+            assert!(pixels.iter().all(|p| p[3] == 0.0 || p[3] == 1.0), "{name}: alpha other than 0 or 1");
+            Some((w as u32, h as u32))
+        }
+        _ => None,
+    }
+}
+
+/// What the README's walk-through says each command prints, on the stream the program prints it to
+/// (status lines on stderr, reports on stdout):
+/// - `paint` prints `wrote FILE (N lobes)` (stderr), `N` the lobes of the material it wrote, at
+///   least one;
+/// - `check` prints the line `verdict: physically correct` (stdout);
+/// - `render` prints the GPU time it took (stderr, `rendered WxH on … ms of GPU time …`) and, for
+///   the mesh view, which lights the `key` estimator split off the map (`key estimator: …`);
+/// - `reference` prints its size and sample count (stderr, `reference WxH at N spp …`).
+fn check_promises(line: &str, dir: &Path, stdout: &str, stderr: &str) {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let out = outputs(line).into_iter().next();
+    let dims = size(line).map(|(w, h)| format!("{w}x{h}"));
+    let has = |text: &str, prefix: &str, parts: &[&str]| {
+        text.lines().any(|l| l.starts_with(prefix) && parts.iter().all(|p| l.contains(p)))
+    };
+    match words.get(1).copied() {
+        Some("paint") => {
+            let out = out.expect("paint names --out");
+            let m = brdf_shop::brdf::Material::load(&dir.join(&out))
+                .unwrap_or_else(|e| panic!("{line:?}: {out} does not load: {e}"));
+            assert!(!m.lobes.is_empty(), "{line:?}: the painted material has no lobes");
+            let want = format!("wrote {out} ({} lobes)", m.lobes.len());
+            assert!(stderr.lines().any(|l| l == want), "{line:?}: no line {want:?} on stderr:\n{stderr}");
+        }
+        Some("check") => {
+            let want = "verdict: physically correct";
+            assert!(stdout.lines().any(|l| l == want), "{line:?}: no line {want:?} on stdout:\n{stdout}");
+        }
+        Some("render") => {
+            let dims = dims.expect("the README's render lines give --size");
+            assert!(
+                has(stderr, &format!("rendered {dims} on "), &["ms of GPU time"]),
+                "{line:?}: no GPU time on stderr:\n{stderr}"
+            );
+            let canvas = words.windows(2).any(|w| w == ["--view", "canvas"]);
+            if !canvas {
+                assert!(has(stderr, "key estimator: ", &[]), "{line:?}: no key lights on stderr:\n{stderr}");
+            }
+        }
+        Some("reference") => {
+            let dims = dims.expect("the README's reference lines give --size");
+            assert!(has(stderr, &format!("reference {dims} at "), &[" spp "]), "{line:?}: stderr:\n{stderr}");
+        }
+        _ => {}
+    }
+}
+
+/// Runs `line` with `sh -c` in `dir` with `path` as `PATH`; returns its exit status, stdout and
+/// stderr, or fails the test when it runs past [`LINE_LIMIT`] (the child is killed first).
+fn run(line: &str, dir: &Path, path: &str) -> (std::process::ExitStatus, String, String) {
     let log = dir.join(".line-output");
+    let err_log = dir.join(".line-errors");
     let file = std::fs::File::create(&log).expect("the output log is created");
+    let err_file = std::fs::File::create(&err_log).expect("the error log is created");
     let mut child = Command::new("sh")
         .args(["-c", line])
         .current_dir(dir)
         .env("PATH", path)
         .stdin(Stdio::null())
-        .stdout(file.try_clone().expect("the log is cloned"))
-        .stderr(file)
+        .stdout(file)
+        .stderr(err_file)
         .spawn()
         .expect("sh starts");
     let start = Instant::now();
@@ -94,13 +182,16 @@ fn run(line: &str, dir: &Path, path: &str) -> (std::process::ExitStatus, String)
         if start.elapsed() > LINE_LIMIT {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("{line:?} ran past {LINE_LIMIT:?}: {}", std::fs::read_to_string(&log).unwrap_or_default());
+            let err = std::fs::read_to_string(&err_log).unwrap_or_default();
+            panic!("{line:?} ran past {LINE_LIMIT:?}: {}{err}", std::fs::read_to_string(&log).unwrap_or_default());
         }
         std::thread::sleep(Duration::from_millis(50));
     };
-    let output = std::fs::read_to_string(&log).unwrap_or_default();
+    let stdout = std::fs::read_to_string(&log).unwrap_or_default();
+    let stderr = std::fs::read_to_string(&err_log).unwrap_or_default();
     let _ = std::fs::remove_file(&log);
-    (status, output)
+    let _ = std::fs::remove_file(&err_log);
+    (status, stdout, stderr)
 }
 
 #[test]
@@ -118,17 +209,26 @@ fn the_readme_walkthrough_runs() {
     .expect("PATH is joined");
     let path = path.to_str().expect("PATH is UTF-8").to_owned();
 
+    let mut images = 0;
     for line in &commands {
-        let (status, output) = run(line, dir.path(), &path);
-        eprintln!("$ {line}\n{output}");
-        assert!(status.success(), "README walk-through: {line:?} exited with {status}:\n{output}");
-        assert!(!output.contains("panicked"), "{line:?}: {output}");
+        let (status, stdout, stderr) = run(line, dir.path(), &path);
+        eprintln!("$ {line}\n{stdout}{stderr}");
+        assert!(status.success(), "README walk-through: {line:?} exited with {status}:\n{stdout}{stderr}");
+        assert!(!stdout.contains("panicked") && !stderr.contains("panicked"), "{line:?}: {stdout}{stderr}");
         for out in outputs(line) {
             let file = dir.path().join(&out);
             let len = std::fs::metadata(&file).map(|m| m.len()).unwrap_or(0);
             assert!(len > 0, "README walk-through: {line:?} left {out} missing or empty");
+            if let Some(got) = decoded_size(&file) {
+                let want = size(line).unwrap_or_else(|| panic!("{line:?} writes the image {out} without --size"));
+                assert_eq!(got, want, "README walk-through: {line:?} wrote {out} at {got:?}, not --size {want:?}");
+                images += 1;
+            }
         }
+        check_promises(line, dir.path(), &stdout, &stderr);
     }
+    // The walk-through's two renders and its reference image were decoded.
+    assert!(images >= 3, "only {images} images in the walk-through");
 }
 
 /// The parser fails where the walk-through is missing, so a README without it fails the test above
@@ -149,4 +249,6 @@ fn the_walkthrough_parser_refuses_what_is_not_a_walkthrough() {
     assert_eq!(outputs("brdf-shop render --out=a.png --size 8x8"), vec!["a.png"]);
     assert_eq!(outputs("brdf-shop paint --out b.json; ls"), vec!["b.json"]);
     assert!(outputs("brdf-shop check --material m.json").is_empty());
+    assert_eq!(size("brdf-shop render --size 256x128 --out a.png"), Some((256, 128)));
+    assert_eq!(size("brdf-shop render --out a.png"), None);
 }

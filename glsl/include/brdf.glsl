@@ -30,6 +30,13 @@ bool brdf_symmetrize();
 
 const float LN_MAX = 88.0;
 
+// The grazing cut-off 2^-20 (docs/model.md, Frames and conventions, The horizon): a direction whose cosine
+// to the normal is under it counts as below the horizon, as in `Material::eval` and the Mitsuba plug-in.
+// A power of two: the same number as the f64 model's.
+const float BRDF_SHOP_GRAZING_COS = 9.5367431640625e-7;
+
+bool brdf_above_horizon(float cos_theta) { return cos_theta >= BRDF_SHOP_GRAZING_COS; }
+
 // ln W(a, b) (docs/model.md, The paper model) for unit a, b in the local frame; -inf where a.z ≤ 0 or b.z ≤ 0.
 float ward_ln(bool gm, vec4 shape, vec3 a, vec3 b) {
     if (!(a.z > 0.0 && b.z > 0.0)) return -1.0 / 0.0;
@@ -64,9 +71,10 @@ float facet_ln(vec4 shape, vec3 h, float max_z) {
     return log(1.0 + s * s + t * t) - log(h.z) - log(2.0 * PI * ax * ay) - log(max_z) - e;
 }
 
-// F_k of the reciprocal form: the facet frames Q (and Q⁻¹ for split lobes), exactly symmetric.
+// F_k of the reciprocal form: the facet frames Q (and Q⁻¹ for split lobes), exactly symmetric; 0 under
+// the grazing cut-off.
 float facet_lobe(GpuLobe l, vec3 wi, vec3 wo) {
-    if (!(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+    if (!(brdf_above_horizon(wi.z) && brdf_above_horizon(wo.z))) return 0.0;
     vec3 h = wi + wo;
     float mz = max(wi.z, wo.z);
     float f = exp(min(facet_ln(l.shape, quat_rotate(quat_conjugate(l.rotation), h), mz), LN_MAX));
@@ -74,13 +82,16 @@ float facet_lobe(GpuLobe l, vec3 wi, vec3 wo) {
     return f;
 }
 
-// F_k(wi, wo) per unit albedo (docs/model.md, The paper model), one way, for a lobe in hand and the material's form.
+// F_k(wi, wo) per unit albedo (docs/model.md, The paper model), one way, for a lobe in hand and the material's form;
+// a paper term whose rotated view is under the grazing cut-off is 0.
 float lobe_one_way_of(GpuLobe l, uint form, vec3 wi, vec3 wo) {
     if (form == 2u) return facet_lobe(l, wi, wo);
     bool gm = form == 1u;
-    float f = ward(gm, l.shape, wi, quat_rotate(l.rotation, wo));
+    vec3 b = quat_rotate(l.rotation, wo);
+    float f = brdf_above_horizon(b.z) ? ward(gm, l.shape, wi, b) : 0.0;
     if (l.flags.x != 0u) {
-        f = 0.5 * (f + ward(gm, l.shape, wi, quat_rotate(quat_conjugate(l.rotation), wo)));
+        vec3 b2 = quat_rotate(quat_conjugate(l.rotation), wo);
+        f = 0.5 * (f + (brdf_above_horizon(b2.z) ? ward(gm, l.shape, wi, b2) : 0.0));
     }
     return f;
 }
@@ -88,17 +99,18 @@ float lobe_one_way_of(GpuLobe l, uint form, vec3 wi, vec3 wo) {
 // F_k(wi, wo) per unit albedo (docs/model.md, The paper model), one way.
 float lobe_one_way(uint k, vec3 wi, vec3 wo) { return lobe_one_way_of(brdf_lobe(k), brdf_form(), wi, wo); }
 
-// One lobe's term of f per unit albedo, symmetrised when `sym`; 0 below the horizon.
+// One lobe's term of f per unit albedo, symmetrised when `sym`; 0 below the horizon (the grazing cut-off).
 float lobe_value(GpuLobe l, uint form, bool sym, vec3 wi, vec3 wo) {
-    if (!(wi.z > 0.0 && wo.z > 0.0)) return 0.0;
+    if (!(brdf_above_horizon(wi.z) && brdf_above_horizon(wo.z))) return 0.0;
     float t = lobe_one_way_of(l, form, wi, wo);
     if (sym) t = 0.5 * (t + lobe_one_way_of(l, form, wo, wi));
     return t;
 }
 
-// f(wi, wo) (docs/model.md, The paper model; symmetrised when the material says so); 0 below the horizon.
+// f(wi, wo) (docs/model.md, The paper model; symmetrised when the material says so); 0 below the horizon: where
+// wi.z or wo.z is under the grazing cut-off BRDF_SHOP_GRAZING_COS.
 vec3 material_eval(vec3 wi, vec3 wo) {
-    if (!(wi.z > 0.0 && wo.z > 0.0)) return vec3(0.0);
+    if (!(brdf_above_horizon(wi.z) && brdf_above_horizon(wo.z))) return vec3(0.0);
     vec3 f = brdf_diffuse().rgb / PI;
     bool sym = brdf_symmetrize();
     uint count = brdf_lobe_count(), k = 0u;

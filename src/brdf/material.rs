@@ -21,6 +21,27 @@ pub const MAX_LOBES: usize = 256;
 /// Slack allowed on the energy bound `ρ_d + Σρ_k ≤ 1` for sums of rounded decimals.
 pub const ENERGY_SLACK: f64 = 1.0e-9;
 
+/// The grazing cut-off `c_min = 2⁻²⁰` (docs/model.md, Frames and conventions, The horizon): a
+/// direction whose cosine to the normal (after normalisation) is under it counts as below the
+/// horizon, and so does a paper lobe's rotated view. A power of two, so the same number in `f32`
+/// ([`GRAZING_COS_F32`]), in the shaders and in the Mitsuba plug-in.
+pub const GRAZING_COS: f64 = 9.5367431640625e-7;
+/// [`GRAZING_COS`] in `f32` (exact).
+pub const GRAZING_COS_F32: f32 = GRAZING_COS as f32;
+
+/// Whether a unit direction with this cosine to the normal is above the horizon: `cos θ ≥ c_min`
+/// ([`GRAZING_COS`]); false for NaN.
+#[inline]
+pub fn above_horizon(cos_theta: f64) -> bool {
+    cos_theta >= GRAZING_COS
+}
+
+/// [`above_horizon`] in `f32`.
+#[inline]
+pub fn above_horizon_f32(cos_theta: f32) -> bool {
+    cos_theta >= GRAZING_COS_F32
+}
+
 /// One specular lobe `ρ_k F_k` (docs/model.md, The paper model and The reciprocal model).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lobe {
@@ -72,12 +93,15 @@ impl Lobe {
     /// `ln` of each term of `F_k` before its weight (½ each for split lobes), with the count; unit
     /// inputs in the local frame. Paper forms: `W(ω_i, R ω_o)` (and `R⁻¹`); the reciprocal form:
     /// the facet lobe about `Q ẑ` (and `Q⁻¹ ẑ`) at `h = ω_i + ω_o`, exactly symmetric in its inputs.
+    /// `−∞` where `ω_i` or `ω_o` is under the grazing cut-off, and for a paper term whose rotated
+    /// view is ([`above_horizon`]).
     pub fn ln_terms(&self, norm: Normalization, wi: DVec3, wo: DVec3) -> ([f64; 2], usize) {
         let shape = self.shape();
         let mut out = [f64::NEG_INFINITY; 2];
+        let inputs_above = above_horizon(wi.z) && above_horizon(wo.z);
         if norm == Normalization::Reciprocal {
             let (frames, n) = self.facet_frames();
-            if wi.z > 0.0 && wo.z > 0.0 {
+            if inputs_above {
                 let h = wi + wo;
                 let max_z = wi.z.max(wo.z);
                 for j in 0..n {
@@ -88,7 +112,9 @@ impl Lobe {
         }
         let (views, n) = self.rotated_views(wo);
         for j in 0..n {
-            out[j] = ward::f64::ln_lobe(norm, &shape, wi, views[j]);
+            if inputs_above && above_horizon(views[j].z) {
+                out[j] = ward::f64::ln_lobe(norm, &shape, wi, views[j]);
+            }
         }
         (out, n)
     }
@@ -224,9 +250,10 @@ impl Material {
     }
 
     /// `ln` of lobe `k`'s term per unit albedo, as the material evaluates it: `F_k(ω_i, ω_o)`, or
-    /// `½[F_k(ω_i, ω_o) + F_k(ω_o, ω_i)]` for a symmetrised material. `−∞` where it is 0. Unit inputs.
+    /// `½[F_k(ω_i, ω_o) + F_k(ω_o, ω_i)]` for a symmetrised material. `−∞` where it is 0 (under the
+    /// grazing cut-off among them). Unit inputs.
     pub fn lobe_ln(&self, k: usize, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !(above_horizon(wi.z) && above_horizon(wo.z)) {
             return f64::NEG_INFINITY;
         }
         let lobe = &self.lobes[k];
@@ -242,9 +269,10 @@ impl Material {
         log_mean_exp(&terms[..count])
     }
 
-    /// `f(ω_i, ω_o)` without symmetrisation, for unit vectors in the local frame.
+    /// `f(ω_i, ω_o)` without symmetrisation, for unit vectors in the local frame; 0 where either is
+    /// under the grazing cut-off.
     fn eval_one_way(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !(above_horizon(wi.z) && above_horizon(wo.z)) {
             return [0.0; 3];
         }
         let mut f = self.diffuse.map(|d| d / std::f64::consts::PI);
@@ -258,7 +286,9 @@ impl Material {
     }
 
     /// `f(ω_i, ω_o)` per RGB channel, in the local frame. Inputs are normalised first; a zero-length
-    /// or non-finite direction gives 0, as does a direction at or below the horizon.
+    /// or non-finite direction gives 0, as does a direction at or below the horizon: one whose
+    /// normalised cosine is under the grazing cut-off [`GRAZING_COS`] (docs/model.md, Frames and
+    /// conventions, The horizon).
     pub fn eval(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
         let (Some(wi), Some(wo)) = (unit(wi), unit(wo)) else {
             return [0.0; 3];
@@ -318,7 +348,7 @@ pub struct MaterialF32 {
 
 impl MaterialF32 {
     fn eval_one_way(&self, wi: Vec3, wo: Vec3) -> [f32; 3] {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !(above_horizon_f32(wi.z) && above_horizon_f32(wo.z)) {
             return [0.0; 3];
         }
         let mut f = self.diffuse.map(|d| d / std::f32::consts::PI);
@@ -329,7 +359,12 @@ impl MaterialF32 {
                 if facet {
                     ward::f32::ln_facet(&l.shape, q.conjugate() * h, max_z).min(LN_MAX_F32).exp()
                 } else {
-                    ward::f32::lobe(self.normalization, &l.shape, wi, q * wo)
+                    let b = q * wo;
+                    if above_horizon_f32(b.z) {
+                        ward::f32::lobe(self.normalization, &l.shape, wi, b)
+                    } else {
+                        0.0
+                    }
                 }
             };
             let mut v = one(l.rotation);

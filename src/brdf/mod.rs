@@ -11,5 +11,5 @@ pub mod material;
 pub mod sampling;
 pub mod ward;
 
-pub use material::{Lobe, Material, MaterialF32, ALPHA_MAX, ALPHA_MIN};
+pub use material::{Lobe, Material, MaterialF32, ALPHA_MAX, ALPHA_MIN, GRAZING_COS};
 pub use ward::Normalization;

@@ -65,10 +65,11 @@ macro_rules! ward_impl {
                 (h / m).length() * m
             }
 
-            /// `exp(ln_value)` saturated at the largest finite float.
+            /// `exp(ln_value)` saturated at the largest finite float. `MAX.ln()` is rounded, in `f32`
+            /// upwards (its `exp` is `inf`), hence the second clamp.
             #[inline]
             fn exp_saturated(ln_value: $s) -> $s {
-                ln_value.min(<$s>::MAX.ln()).exp()
+                ln_value.min(<$s>::MAX.ln()).exp().min(<$s>::MAX)
             }
 
             /// Tangents of the half-vector slope beyond which the Gaussian is exactly 0 at this precision.

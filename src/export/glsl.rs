@@ -104,6 +104,7 @@ pub fn glsl(m: &Material) -> String {
 (glsl/include/math.glsl, brdf.glsl) and the material as constants. Entry points:
   vec3 material_eval(vec3 wi, vec3 wo)   f(ω_i, ω_o) per RGB channel, unit vectors in the local shading
                                          frame (z = normal, x = tangent, y = z × x); 0 below the horizon
+                                         (a z under BRDF_SHOP_GRAZING_COS = 2^-20, as in brdf-shop eval)
   vec3 brdf_shop_eval(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)   the same for world-space vectors
   mixture_total / mixture_sample / mixture_pdf   importance sampling of f·cos (see brdf.glsl)
 It defines PI, quat_rotate, quat_conjugate, GpuLobe, the functions above and names starting with

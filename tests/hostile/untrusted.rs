@@ -64,6 +64,25 @@ fn is_fifo(p: &Path) -> bool {
 // ---------------------------------------------------------------------------------------------------
 // Mesh files: repeated PLY elements, expansion past the limits.
 
+/// The pixels of a linear RGBA EXR that `reference` wrote, row by row.
+fn exr_pixels(path: &Path) -> Vec<[f32; 4]> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+        |px: &mut (usize, Vec<[f32; 4]>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px.1[pos.y() * px.0 + pos.x()] = [r, g, b, a]
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    img.layer_data.channel_data.pixels.1
+}
+
+/// Each case's mesh is the control's (the first `vertex` element's three vertices and the first
+/// `face` element's triangle, nothing of the later elements): the same vertices and triangle through
+/// the library's loader, and through the binary the same image as the control's, pixel for pixel
+/// (`reference` is deterministic: the same mesh, camera and samples give the same bits), with the
+/// triangle covering part of it.
 #[test]
 fn ply_second_vertex_and_face_elements_are_read_past() {
     let dir = tmp();
@@ -71,6 +90,16 @@ fn ply_second_vertex_and_face_elements_are_read_past() {
     let env = exr_file(d, "env.exr", 1.0);
     let head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
     let face = "element face 1\nproperty list uchar int vertex_indices\n";
+    let head_2 = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+    let control = write(d, "control.ply", format!("{head}{face}end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    let want = brdf_shop::scene::Mesh::load(&control).expect("the control PLY loads");
+    assert_eq!((want.positions.len(), want.indices.len()), (3, 3), "the control is one triangle");
+    let control_out = d.join("control.exr");
+    let r = reference(&env, &control, &control_out);
+    assert_eq!(r.code, 0, "control: {}", r.stderr);
+    let want_pixels = exr_pixels(&control_out);
+    let covered = want_pixels.iter().filter(|p| p[3] > 0.5).count();
+    assert!(covered > 0 && covered < want_pixels.len(), "the control covers {covered} of 64 pixels");
     let cases = [
         // A second `vertex` element with one property, after the faces and between them.
         format!("{head}{face}element vertex 2\nproperty float q\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n5\n6\n"),
@@ -78,13 +107,19 @@ fn ply_second_vertex_and_face_elements_are_read_past() {
         // A second `face` element without a vertex list, and one with indices past the vertices.
         format!("{head}{face}element face 1\nproperty int k\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n9\n"),
         format!("{head}{face}{face}end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 7 8 9\n"),
+        // A second, complete mesh (another triangle's `x y z` and a valid face): a loader that took
+        // it would load without complaint, and only the vertices and the image tell.
+        format!("{head}{face}{head_2}{face}end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n5 5 5\n7 5 5\n5 9 5\n3 2 1 0\n"),
     ];
     for (k, text) in cases.iter().enumerate() {
         let ply = write(d, &format!("m{k}.ply"), text);
         let out = d.join(format!("o{k}.exr"));
+        let mesh = brdf_shop::scene::Mesh::load(&ply).unwrap_or_else(|e| panic!("case {k}: {e}"));
+        assert_eq!(mesh.positions, want.positions, "case {k}: the vertices are not the first vertex element's");
+        assert_eq!(mesh.indices, want.indices, "case {k}: the triangles are not the first face element's");
         let r = reference(&env, &ply, &out);
         assert_eq!(r.code, 0, "case {k}: only the first vertex and face elements are the mesh: {}", r.stderr);
-        assert!(out.exists(), "case {k}");
+        assert!(exr_pixels(&out) == want_pixels, "case {k}: the image differs from the control's");
     }
 }
 
@@ -154,6 +189,7 @@ fn gltf_buffer_fifo_or_zero_length_is_refused_without_blocking() {
         refused(&reference(&env, &g, &out), 1, &[s(&g), want]);
     }
     assert!(is_fifo(&d.join("pipe.bin")) && !out.exists());
+    assert_eq!(listing(d), ["empty.bin", "env.exr", "m0.gltf", "m1.gltf", "m2.gltf", "pipe.bin"]);
 }
 
 #[test]
@@ -190,6 +226,14 @@ fn gltf_buffer_uris_stay_in_the_gltf_folder() {
         assert!(!named, "{uri}: the message names the resolved path: {}", r.stderr);
         assert!(!r.stderr.contains("36 bytes"), "{uri}: the message gives the secret's size: {}", r.stderr);
     }
+    // Nothing written by the refusals: no image, no temporary file, the planted links in place.
+    assert_eq!(listing(d), ["env.exr", "mesh", "secret.bin"]);
+    let mut want: Vec<String> = (0..uris.len()).map(|k| format!("m{k}.gltf")).collect();
+    want.extend(["abs-link.bin", "link.bin", "sub", "up"].map(String::from));
+    want.sort();
+    assert_eq!(listing(&mesh), want);
+    assert!(listing(&mesh.join("sub")).is_empty());
+    assert_eq!(std::fs::read(&secret).unwrap(), triangle_bytes());
     // The positive control: the same triangle beside the glTF file, named plainly, percent-encoded,
     // and in a subfolder.
     write(&mesh, "b.bin", triangle_bytes());
@@ -213,6 +257,7 @@ fn gltf_long_uri_is_quoted_short() {
     refused(&r, 1, &[s(&g), "buffer 0", "1048576 bytes"]);
     let longest = r.stderr.split(|c| c != 'x').map(str::len).max().unwrap_or(0);
     assert!(longest <= 80, "{longest} characters of the URI quoted: {}", r.stderr);
+    assert_eq!(listing(d), ["env.exr", "long.gltf"]);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -342,13 +387,24 @@ fn two_outputs_naming_one_file_are_refused_before_any_work() {
             refused(&r, 1, &["--timings", "--out"]);
         }
     }
-    // Relative spellings, from inside the folder.
-    let r = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+    // Relative spellings, from inside the folder (under the suite's memory and time limits): the
+    // same one-line refusal naming both flags, the existing file untouched, nothing added.
+    let args = ["reference", "--view", "canvas", "--size", "8x8", "--out", "o.exr", "--timings", "./o.exr"];
+    let child = Command::new("sh")
         .current_dir(d)
-        .args(["reference", "--view", "canvas", "--size", "8x8", "--out", "o.exr", "--timings", "./o.exr"])
-        .output()
-        .unwrap();
-    assert_eq!(r.status.code(), Some(1), "{}", String::from_utf8_lossy(&r.stderr));
+        .arg("-c")
+        .arg(format!("ulimit -v {CPU_MEM_KIB} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_brdf-shop"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary starts");
+    let r = finish(child, CPU_SECS, "reference with relative --out and --timings");
+    refused(&r, 1, &["--timings", "--out"]);
+    assert_eq!(std::fs::read(&existing).unwrap(), b"old image");
+    assert_eq!(listing(d), ["alias.json", "o.exr", "sub"]);
     // The editor: --screenshot or --frame-stats naming --out's file is refused before a window
     // opens (no display is given: a window would fail with exit status 2).
     let shot = format!("{}/./m.png", s(d));
@@ -364,6 +420,7 @@ fn two_outputs_naming_one_file_are_refused_before_any_work() {
     }
     assert_eq!(std::fs::read(&existing).unwrap(), b"old image");
     assert_eq!(listing(d), ["alias.json", "o.exr", "sub"]);
+    assert!(listing(&d.join("sub")).is_empty());
 }
 
 #[test]
