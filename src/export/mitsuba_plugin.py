@@ -459,7 +459,24 @@ def parse_size(text):
     return w, h
 
 
-def spec_envmap(path):
+def turned(data, degrees):
+    """The map turned by `degrees` about brdf-shop's up axis (+y), counter-clockwise seen from above,
+    as `brdf-shop render --env-rotation` turns it (`Environment::rotated`): the texel at column i
+    takes the map at column i + W·degrees/360, linearly between the two nearest columns, in f64,
+    rounded to f32 as brdf-shop keeps its texels."""
+    import numpy as np
+
+    w = data.shape[1]
+    shift = (degrees / 360.0) % 1.0 * w
+    whole, f = int(np.floor(shift)), shift - np.floor(shift)
+    a = np.roll(data, -whole, axis=1)
+    if f == 0.0:
+        return a
+    b = np.roll(data, -(whole + 1), axis=1)
+    return ((1.0 - f) * a + f * b).astype(np.float32).astype(np.float64)
+
+
+def spec_envmap(path, rotation=0.0):
     """The map as a bitmap whose lookup in Mitsuba's `envmap` equals brdf-shop's (docs/model.md,
     Frames and conventions).
 
@@ -474,6 +491,8 @@ def spec_envmap(path):
     bitmap = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False)
     data = np.array(bitmap, dtype=np.float64)
     data = np.nan_to_num(data, nan=0.0, posinf=0.0, neginf=0.0)
+    if rotation != 0.0:
+        data = turned(data, rotation)
     h, w, _ = data.shape
     rows = np.empty((2 * h + 1, w, 3))
     rows[1::2] = data
@@ -482,14 +501,14 @@ def spec_envmap(path):
     return mi.Bitmap(rows.astype(np.float32), mi.Bitmap.PixelFormat.RGB)
 
 
-def render(env, mesh, width, height, spp, seed=0):
+def render(env, mesh, width, height, spp, seed=0, rotation=0.0):
     """Linear RGBA, row-major from the top: the object's radiance through each pixel centre,
     averaged over `spp` estimates, and the environment (alpha 0) behind it."""
     import numpy as np
 
     emitter = {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}
     if env is not None:
-        emitter = {"type": "envmap", "bitmap": spec_envmap(env)}
+        emitter = {"type": "envmap", "bitmap": spec_envmap(env, rotation)}
     scene = mi.load_dict(
         {
             "type": "scene",
@@ -579,6 +598,11 @@ def main(argv=None):
     p.add_argument("--size", default="512x512", help="WxH (default 512x512)")
     p.add_argument("--spp", default="256", help="estimates per pixel (default 256)")
     p.add_argument("--seed", default="0", help="random seed (default 0)")
+    p.add_argument(
+        "--env-rotation",
+        default="0",
+        help="turn the map DEG degrees about the up axis, as brdf-shop render --env-rotation does (default 0)",
+    )
     p.add_argument("--out", required=True, help="output image (.exr)")
     try:
         args = p.parse_args(argv)
@@ -587,6 +611,12 @@ def main(argv=None):
             spp, seed = int(args.spp), int(args.seed)
         except ValueError:
             raise UserError("--spp/--seed: not a whole number")
+        try:
+            rotation = float(args.env_rotation)
+        except ValueError:
+            raise UserError("--env-rotation: %r is not a number of degrees" % args.env_rotation[:80])
+        if not math.isfinite(rotation):
+            raise UserError("--env-rotation: %r is not a finite number of degrees" % args.env_rotation[:80])
         if not 1 <= spp <= 1 << 20:
             raise UserError("--spp: %d is outside 1..1048576" % spp)
         if not args.out.lower().endswith(".exr"):
@@ -601,7 +631,7 @@ def main(argv=None):
                 raise UserError("--env: %r is not an .exr or .hdr file" % args.env[:200])
             if not os.path.isfile(args.env):
                 raise UserError("%s: no such file" % args.env[:200])
-        img = render(args.env, args.mesh, width, height, spp, seed)
+        img = render(args.env, args.mesh, width, height, spp, seed, rotation)
         write_exr(args.out, img)
     except UserError as e:
         print("%s: %s" % (os.path.basename(sys.argv[0]), e), file=sys.stderr)
