@@ -7,7 +7,8 @@
 //! (Cycles)), so the tolerances bound its error as measured, per case, with the reason beside each.
 //! The negative checks turn on a fault in the exported script through the test-only environment
 //! variable `BRDF_SHOP_BLENDER_FAULT` (`tangent-90`: every facet tangent turned by 90°;
-//! `inverse-frame`: `Q⁻¹` in place of each facet frame `Q`), read by the script's template
+//! `inverse-frame`: `Q⁻¹` in place of each facet frame `Q`; `env-rotation-negated`: the environment
+//! turned by −DEG for `--env-rotation DEG`), read by the script's template
 //! (src/export/blender_material.py), and must fail their tolerance.
 //!
 //! All Cycles renders of a test run in one Python process (tests/blender/batch.py). Run with
@@ -314,6 +315,161 @@ fn blender_renders_what_reference_renders() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// `brdf-shop reference` of `material` on the sphere under `env` turned by `deg` degrees
+/// (`--env-rotation`), at [`SIZE`], which must succeed.
+fn reference_turned(material: &Path, env: &Path, deg: &str, spp: u32, out: &Path) {
+    let (code, _, err) = common::run(&[
+        "reference",
+        "--material",
+        material.to_str().unwrap(),
+        "--env",
+        env.to_str().unwrap(),
+        &format!("--env-rotation={deg}"),
+        "--mesh",
+        "sphere",
+        "--size",
+        SIZE,
+        "--spp",
+        &spp.to_string(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "reference {}: {err}", out.display());
+}
+
+/// The background of a turn that is not a whole number of texel columns (360°/W: 37° is 52.6
+/// columns of venice.exr's 512). brdf-shop turns the map itself, each texel taken linearly between
+/// the two nearest columns ([`brdf_shop::scene::env::Environment::rotated`]), a blur Blender's turned
+/// lookup of the map does not have; seen directly, venice.exr's detail shows it: measured 3.0 % at
+/// 37°, deterministic (the background is one bilinear lookup per pixel centre in both). A whole
+/// number of columns (90°, or 37.265625° = 53 columns) measured 0.01 %, as unturned. The bound sits
+/// above the blur and far below the map unturned (319 %) or turned the other way (467 %).
+const RESAMPLED_BACKGROUND_TOL: f64 = 0.05;
+
+/// `--env-rotation DEG` turns the ready scene's environment as `brdf-shop reference --env-rotation
+/// DEG` does: the diffuse-only material under venice.exr turned by 90° (a whole number of texel
+/// columns) and by 37° (not), Cycles at 512 spp against `reference` at 1024, compared as the
+/// unturned "diffuse only (venice)" case of [`blender_renders_what_reference_renders`] is: relative
+/// L1 over the object within [`DIFFUSE_TOL`] (the turn moves the lighting, not the closures, so
+/// what that bound holds is again Cycles' noise and the sphere's tessellation: measured 0.40 % at
+/// 90°, 0.48 % at 37°, 0.55 % unturned), and the background within [`CAMERA_TOL`] at 90°
+/// (measured 0.01 %) and [`RESAMPLED_BACKGROUND_TOL`] at 37°. The test can tell: `reference` turned differs from
+/// `reference` unturned by more than 3 × [`DIFFUSE_TOL`] over the object (measured 22.4 % at 90°,
+/// 8.8 % at 37°; 287 % and 319 % over the background), so an ignored flag fails by more than
+/// Cycles' noise and the model error (0.55 % unturned); and the script with the turn's sign flipped
+/// (fault `env-rotation-negated`) must fail both bounds (measured 24.0 % and 16.1 % over the
+/// object, 391 % and 467 % over the background). Those renders take 256 spp: the right sign at
+/// 256 spp measured 0.60 % and 0.72 % over the object, under the bound, so the object alone tells
+/// the two signs apart (at 64 spp Cycles' noise alone is 1.7–1.9 %).
+#[test]
+fn blender_env_rotation_turns_like_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let venice = common::asset("hdri/venice.exr");
+    let materials = common::export_materials(d);
+    let material = materials.iter().find(|(name, _)| name == "diffuse-only").unwrap().1.clone();
+    let script = d.join("diffuse.py");
+    common::export("blender", &material, &script);
+    // (degrees, fault, Cycles spp, background bound, must fail)
+    let cases: [(&str, &str, u32, f64, bool); 4] = [
+        ("90", "", 512, CAMERA_TOL, false),
+        ("37", "", 512, RESAMPLED_BACKGROUND_TOL, false),
+        ("90", "env-rotation-negated", 256, CAMERA_TOL, true),
+        ("37", "env-rotation-negated", 256, RESAMPLED_BACKGROUND_TOL, true),
+    ];
+    let mut jobs = Vec::new();
+    let mut outs = Vec::new();
+    for (k, (deg, fault, spp, _, _)) in cases.iter().enumerate() {
+        let out = d.join(format!("turn{k}-cycles.exr"));
+        jobs.push(serde_json::json!({
+            "script": script, "fault": fault,
+            "args": ["--env", venice, "--env-rotation", deg, "--size", SIZE, "--spp", spp.to_string(), "--out", out],
+        }));
+        outs.push(out);
+    }
+    let job_file = d.join("jobs.json");
+    std::fs::write(&job_file, serde_json::to_string(&jobs).unwrap()).unwrap();
+    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/batch.py");
+    let t = std::time::Instant::now();
+    let out = Command::new(python()).arg(&harness).arg(&job_file).output().unwrap();
+    let cycles_seconds = t.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "batch: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
+    let job_lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("JOB ")).collect();
+    assert_eq!(job_lines.len(), jobs.len(), "{stdout}");
+    for l in &job_lines {
+        assert_eq!(l.split_whitespace().nth(2), Some("0"), "{l}");
+    }
+
+    let t = std::time::Instant::now();
+    let reference = |deg: &str| {
+        let p = d.join(format!("reference-{deg}.exr"));
+        reference_turned(&material, &venice, deg, 1024, &p);
+        common::read_exr(&p)
+    };
+    let unturned = reference("0");
+    let turned = [("90", reference("90")), ("37", reference("37"))];
+    let mut failures = Vec::new();
+    println!("blender --env-rotation, {SIZE}, diffuse-only under venice.exr, Cycles against brdf-shop reference:");
+    println!("  {:34} {:>9} {:>9} {:>11} {:>9}  result", "case", "object", "bound", "background", "bound");
+    for (deg, b) in &turned {
+        // An ignored flag: the unturned image against the turned one.
+        let object = relative_l1(&unturned, b).unwrap();
+        let background = background_l1(&unturned, b);
+        let label = format!("reference, 0° for {deg}°");
+        let differs = object > 3.0 * DIFFUSE_TOL;
+        let verdict = if differs { "differs by more than the bound, as it must" } else { "TOO CLOSE" };
+        println!(
+            "  {label:34} {:>8.2}% {:>8.2}% {:>10.2}% {:>9}  {verdict}",
+            100.0 * object,
+            300.0 * DIFFUSE_TOL,
+            100.0 * background,
+            ""
+        );
+        if !differs {
+            failures.push(format!("{label}: the turn changes the object by {object:.4} only"));
+        }
+    }
+    for (k, (deg, fault, spp, background_tol, must_fail)) in cases.iter().enumerate() {
+        let label = format!("{deg}°{}, {spp}/1024 spp", if fault.is_empty() { "" } else { ", sign flipped" });
+        let a = common::read_exr(&outs[k]);
+        let b = &turned.iter().find(|(t, _)| t == deg).unwrap().1;
+        let covered = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p[3] >= 0.5 && q[3] >= 0.5).count();
+        assert!(covered > 64 * 64 / 4, "{label}: only {covered} pixels on the object in both");
+        let (mismatched, off_edge) = coverage_mismatches(&a, b);
+        assert_eq!(off_edge, 0, "{label}: {mismatched} pixels covered in one image only, {off_edge} off the outline");
+        let object = relative_l1(&a, b).unwrap();
+        let background = background_l1(&a, b);
+        // A fault must fail both bounds.
+        let (object_ok, background_ok) = (object < DIFFUSE_TOL, background < *background_tol);
+        let verdict = match (must_fail, object_ok || background_ok, object_ok && background_ok) {
+            (false, _, true) => "pass",
+            (false, _, false) => "FAIL",
+            (true, false, _) => "fails, as it must",
+            (true, true, _) => "PASSES (must fail)",
+        };
+        println!(
+            "  {label:34} {:>8.2}% {:>8.2}% {:>10.2}% {:>8.2}%  {verdict}",
+            100.0 * object,
+            100.0 * DIFFUSE_TOL,
+            100.0 * background,
+            100.0 * background_tol
+        );
+        if verdict != "pass" && verdict != "fails, as it must" {
+            failures.push(format!("{label}: object {object:.4}, background {background:.4}: {verdict}"));
+        }
+    }
+    // The harness prints the process's CPU time so far (all of Cycles' threads) on each job line.
+    let cpu: f64 =
+        job_lines.last().and_then(|l| l.split_whitespace().nth(4)).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    println!(
+        "  (Cycles: {} renders in one process, {cycles_seconds:.1} s wall, {cpu:.1} s CPU; reference {:.1} s wall)",
+        jobs.len(),
+        t.elapsed().as_secs_f64()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
 /// A material that needs more than 64 closures (Cycles drops the rest without a message) is
 /// refused: one line, exit status 1, nothing written.
 #[test]
@@ -366,8 +522,12 @@ fn blender_script_refuses_bad_arguments_in_one_line() {
     let o = out_exr.to_str().unwrap();
     let missing = dir.path().join("missing.exr");
     let png = dir.path().join("o.png");
-    let cases: [(Vec<&str>, &str); 7] = [
+    let cases: [(Vec<&str>, &str); 11] = [
         (vec!["--env", missing.to_str().unwrap(), "--out", o], "missing.exr"),
+        (vec!["--env-rotation", "nan", "--out", o], "--env-rotation"),
+        (vec!["--env-rotation", "-inf", "--out", o], "--env-rotation"),
+        (vec!["--env-rotation", "1e400", "--out", o], "--env-rotation"),
+        (vec!["--env-rotation", "east", "--out", o], "--env-rotation"),
         (vec!["--env", script.to_str().unwrap(), "--out", o], "--env"),
         (vec!["--size", "0x5", "--out", o], "--size"),
         (vec!["--spp", "-3", "--out", o], "--spp"),

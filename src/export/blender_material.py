@@ -5,8 +5,8 @@ Python with the `bpy` module, it creates the node group `brdf-shop NAME` and the
 (its lookup images packed into the .blend), ready to assign to an object or to append from a saved
 file. Run with flags, it renders brdf-shop's default view instead:
 
-    python3 THIS.py [--env F.exr|F.hdr] [--mesh sphere|F.obj|F.ply|F.glb] [--size WxH] [--spp N]
-                    [--seed N] [--save M.blend] --out I.exr
+    python3 THIS.py [--env F.exr|F.hdr] [--env-rotation DEG] [--mesh sphere|F.obj|F.ply|F.glb]
+                    [--size WxH] [--spp N] [--seed N] [--save M.blend] --out I.exr
     blender --background --python THIS.py -- [the same flags]
 
 the default camera view of brdf-shop (eye (0,0,4), target the origin, up +y, vertical fov 30°, in
@@ -14,8 +14,10 @@ brdf-shop's y-up frame; Blender's frame is z-up: brdf-shop (x, y, z) is Blender 
 object under the environment map with direct lighting (Cycles, emitter and BSDF sampling with MIS,
 no further bounces), one estimate per sample through each pixel's centre, written as a linear RGBA
 OpenEXR (alpha: the object's coverage of the pixel centre), the image `brdf-shop reference`
-computes. Without --env the object is lit by a uniform white environment. --save also writes the
-scene as a .blend (--out may then be left out).
+computes. Without --env the object is lit by a uniform white environment. --env-rotation DEG turns
+the map by DEG degrees about brdf-shop's up axis (+y, Blender's +Z), counter-clockwise seen from
+above, as `brdf-shop render/reference --env-rotation DEG` do. --save also writes the scene as a
+.blend (--out may then be left out).
 
 Run without flags in a file that already holds a material or node group of these names (a cube's
 `Material` in Blender's start file, or an earlier run of this script), it takes them over: their
@@ -71,7 +73,8 @@ class Facet:
 # @MATERIAL_DATA@
 
 # Test hook (tests/export_blender.rs, negative checks): "tangent-90" turns every tangent by 90°,
-# "inverse-frame" puts Q^-1 in place of each facet frame Q. Unset in normal use.
+# "inverse-frame" puts Q^-1 in place of each facet frame Q, "env-rotation-negated" turns the
+# environment by -DEG for --env-rotation DEG. Unset in normal use.
 FAULT = os.environ.get("BRDF_SHOP_BLENDER_FAULT", "")
 
 
@@ -502,10 +505,19 @@ def load_env(path):
     return img
 
 
-def world(env):
+def world(env, rotation=0.0):
     """The environment: brdf-shop looks a direction d up at u = fract(atan2(d.x, -d.z) / 2pi),
     v = acos(d.y) / pi; Blender's equirectangular lookup of the same direction (x, -z, y) is that
-    turned by -90° about Z, so the direction is turned by +90° about Z first."""
+    turned by -90° about Z, so the direction is turned by +90° about Z first.
+
+    `rotation` (degrees) turns the map as brdf-shop's `--env-rotation` does (src/scene/env.rs,
+    `Environment::rotated`): what lay in direction d lies in R_y(rotation) d, so the radiance from d
+    is the map's at R_y(-rotation) d. The change of frame is a rotation taking brdf-shop's +y to
+    Blender's +Z, so R_y(a) is R_Z(a) in Blender's frame, and the Mapping node (type Vector: its
+    output is its Euler rotation applied to its input) looks D up at R_Z(90°) R_Z(-rotation) D: a Z
+    rotation of 90° - rotation (tests/export_blender.rs renders both signs against `brdf-shop
+    reference --env-rotation`). The turn is taken as brdf-shop takes it, (rotation / 360) mod 1 of a
+    full turn, which also keeps the node's single-precision angle within [-270°, 90°]."""
     w = bpy.data.worlds.new("brdf-shop environment")
     if w.node_tree is None:
         w.use_nodes = True
@@ -521,7 +533,8 @@ def world(env):
         coords = nodes.new("ShaderNodeTexCoord")
         mapping = nodes.new("ShaderNodeMapping")
         mapping.vector_type = "VECTOR"
-        mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.5 * math.pi)
+        turn = ((-rotation if FAULT == "env-rotation-negated" else rotation) / 360.0) % 1.0
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, 0.5 * math.pi - 2.0 * math.pi * turn)
         tex = nodes.new("ShaderNodeTexEnvironment")
         tex.image = load_env(env)
         tex.interpolation = "Linear"
@@ -545,7 +558,7 @@ def camera(width, height):
     return obj
 
 
-def build_scene(env, mesh, width, height, spp, seed):
+def build_scene(env, rotation, mesh, width, height, spp, seed):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     mat = build_material()
@@ -553,7 +566,7 @@ def build_scene(env, mesh, width, height, spp, seed):
     obj.data.materials.clear()
     obj.data.materials.append(mat)
     scene.camera = camera(width, height)
-    scene.world = world(env)
+    scene.world = world(env, rotation)
     r = scene.render
     r.engine = "CYCLES"
     r.resolution_x, r.resolution_y, r.resolution_percentage = width, height, 100
@@ -705,6 +718,17 @@ def parse_size(text):
     return w, h
 
 
+def parse_rotation(text):
+    """--env-rotation: any finite number of degrees, as brdf-shop takes it."""
+    try:
+        deg = float(text)
+    except ValueError:
+        raise UserError("--env-rotation: %r is not a number of degrees" % text[:80])
+    if not math.isfinite(deg):
+        raise UserError("--env-rotation: %r is not a finite number of degrees" % text[:80])
+    return deg
+
+
 def script_args(argv):
     """The script's own flags: after `--` inside Blender; all arguments under plain Python."""
     if argv is not None:
@@ -719,7 +743,7 @@ def script_args(argv):
 class Parser:
     """argparse without its usage text and exit: one line per error."""
 
-    FLAGS = ("--env", "--mesh", "--size", "--spp", "--seed", "--save", "--out")
+    FLAGS = ("--env", "--env-rotation", "--mesh", "--size", "--spp", "--seed", "--save", "--out")
 
     @staticmethod
     def parse(args):
@@ -728,7 +752,7 @@ class Parser:
         while i < len(args):
             a = args[i]
             if a in ("-h", "--help"):
-                raise UserError("usage: [--env F.exr|F.hdr] [--mesh sphere|F.obj|F.ply|F.glb] [--size WxH] [--spp N] [--seed N] [--save M.blend] --out I.exr")
+                raise UserError("usage: [--env F.exr|F.hdr] [--env-rotation DEG] [--mesh sphere|F.obj|F.ply|F.glb] [--size WxH] [--spp N] [--seed N] [--save M.blend] --out I.exr")
             if a not in Parser.FLAGS:
                 raise UserError("%r: unknown argument (known: %s)" % (a[:80], ", ".join(Parser.FLAGS)))
             if i + 1 >= len(args):
@@ -760,6 +784,7 @@ def main(argv=None):
             raise UserError("--spp: %d is outside 1..16777216" % spp)
         if not 0 <= seed < 1 << 31:
             raise UserError("--seed: %d is outside 0..2147483647" % seed)
+        rotation = parse_rotation(a.get("env-rotation", "0"))
         out, save = a.get("out"), a.get("save")
         if out is None and save is None:
             raise UserError("--out: missing (or give --save M.blend)")
@@ -772,7 +797,7 @@ def main(argv=None):
         for flag, path, ext in (("--save", save, ".blend"), ("--out", out, ".exr")):
             if path is not None:
                 outputs.append(Output(flag, path, ext).open())
-        scene = build_scene(env, a.get("mesh", "sphere"), width, height, spp, seed)
+        scene = build_scene(env, rotation, a.get("mesh", "sphere"), width, height, spp, seed)
         for o in outputs:
             if o.flag == "--save":
                 # A copy, so the open file keeps no name of the private folder; paths kept as they
