@@ -18,6 +18,7 @@ pub mod fsio;
 pub mod imageio;
 pub mod interrupt;
 pub mod measure;
+pub mod plot;
 pub mod reference;
 pub mod render;
 pub mod rng;

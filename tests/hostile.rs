@@ -19,12 +19,12 @@
 //!   takes under 2 s (CPU) or 20 s (GPU, debug build with validation) on the 2-core machine; the
 //!   issue's hangs ran for hours.
 
-#[path = "hostile/support.rs"]
-mod support;
-#[path = "hostile/own_files.rs"]
-mod own_files;
 #[path = "hostile/blender.rs"]
 mod blender;
+#[path = "hostile/own_files.rs"]
+mod own_files;
+#[path = "hostile/support.rs"]
+mod support;
 #[path = "hostile/untrusted.rs"]
 mod untrusted;
 

@@ -1,6 +1,7 @@
 //! Energy and reciprocity measurements of a material (docs/model.md, The energy bound): directional albedo
 //! `a(ω_o) = ∫ f(ω_i, ω_o) cos θ_i dω_i` by importance-sampled Monte Carlo with a standard error, its
-//! maximum over a dense set of view directions (up to 89.9°), and the reciprocity error
+//! maximum over a dense set of view directions (up to 89.9°) with the curve of that maximum against
+//! the view angle (total and per lobe, [`AlbedoCurve`]), and the reciprocity error
 //! `max |f(a,b) − f(b,a)| / max f` over random pairs.
 //!
 //! Every estimate is reproducible: each view direction has its own seeded generator, so parallel
@@ -122,27 +123,97 @@ fn albedo_directions(m: &Material) -> Vec<(f64, f64)> {
 
 /// [`max_directional_albedo`] under a [`Watch`] (`None` when stopped).
 pub fn max_directional_albedo_watched(m: &Material, n: usize, watch: Watch<'_>) -> Option<MaxAlbedo> {
-    let dirs = albedo_directions(m);
-    dirs.par_iter()
+    mc_views_watched(m, n, watch).map(|views| mc_max(&views))
+}
+
+/// The largest channel of `a(ω_o)` at each of [`albedo_directions`] (in its order), `n` samples each,
+/// the `i`-th seeded by `i`.
+fn mc_views_watched(m: &Material, n: usize, watch: Watch<'_>) -> Option<Vec<MaxAlbedo>> {
+    albedo_directions(m)
+        .par_iter()
         .enumerate()
         .map(|(i, &(t, p))| {
             let e = directional_albedo_watched(m, direction(t.to_radians(), p.to_radians()), n, i as u64, watch)?;
             let c = (1..3).fold(0, |best, c| if e.value[c] > e.value[best] { c } else { best });
             Some(MaxAlbedo { value: e.value[c], std_err: e.std_err[c], channel: c, theta_deg: t, phi_deg: p })
         })
-        .collect::<Option<Vec<_>>>()
-        .map(|all| {
-            all.into_iter().fold(
-                MaxAlbedo { value: f64::NEG_INFINITY, std_err: 0.0, channel: 0, theta_deg: 0.0, phi_deg: 0.0 },
-                |a, b| {
-                    if b.value > a.value {
-                        b
-                    } else {
-                        a
-                    }
-                },
-            )
+        .collect()
+}
+
+/// [`max_directional_albedo_watched`] and the albedo curve from the same estimates, each point's
+/// lobes measured again from the same samples ([`directional_albedo_lobes_watched`]).
+fn mc_measure_watched(m: &Material, n: usize, watch: Watch<'_>) -> Option<(MaxAlbedo, AlbedoCurve)> {
+    let views = mc_views_watched(m, n, watch)?;
+    let points = per_theta(&views, |v| *v)
+        .par_iter()
+        .map(|&i| {
+            let total = views[i];
+            let wo = direction(total.theta_deg.to_radians(), total.phi_deg.to_radians());
+            let lobes: Vec<f64> = if m.lobes.is_empty() {
+                Vec::new()
+            } else {
+                let shares = directional_albedo_lobes_watched(m, wo, n, i as u64, watch)?;
+                shares.iter().map(|s| s[total.channel]).collect()
+            };
+            Some(AlbedoPoint::new(total, &lobes))
         })
+        .collect::<Option<Vec<_>>>()?;
+    Some((mc_max(&views), AlbedoCurve::new(points)))
+}
+
+/// The largest of the Monte Carlo views (the first of equals).
+fn mc_max(views: &[MaxAlbedo]) -> MaxAlbedo {
+    views.iter().copied().fold(
+        MaxAlbedo { value: f64::NEG_INFINITY, std_err: 0.0, channel: 0, theta_deg: 0.0, phi_deg: 0.0 },
+        |a, b| {
+            if b.value > a.value {
+                b
+            } else {
+                a
+            }
+        },
+    )
+}
+
+/// Each lobe's share of the estimate [`directional_albedo`] makes from the same `n` samples (same
+/// `seed`): the mean of `ρ_k F_k(ω_i, ω_o) cos θ_i / p(ω_i)` per channel, `F_k` the lobe's term as
+/// the material evaluates it (symmetrised where the material is). With the diffuse term's share
+/// they add up to the estimate, to rounding. One unit of [`Watch`] per sample; `None` when stopped.
+pub fn directional_albedo_lobes_watched(
+    m: &Material,
+    wo: DVec3,
+    n: usize,
+    seed: u64,
+    watch: Watch<'_>,
+) -> Option<Vec<[f64; 3]>> {
+    let sampler = MaterialSampler::new(m, wo);
+    let wo_unit = super::material::unit(wo);
+    let mut rng = Pcg32::new(seed, 0x5eed);
+    let mut sums = vec![[0.0f64; 3]; m.lobes.len()];
+    for k in 0..n {
+        if k % CHUNK == 0 {
+            if (watch.stop)() {
+                return None;
+            }
+            (watch.advance)(CHUNK.min(n - k) as u64);
+        }
+        let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
+        // The weight's own `ω_i` for the pdf and the cosine; the lobe terms take unit inputs.
+        let Some(wi) = sampler.sample(u0, 1.0 - u1, u2) else { continue };
+        let (Some(wi_unit), Some(wo)) = (super::material::unit(wi), wo_unit) else { continue };
+        let p = sampler.pdf(wi);
+        if !(p > 0.0) {
+            continue;
+        }
+        for (j, (sum, lobe)) in sums.iter_mut().zip(&m.lobes).enumerate() {
+            let f = m.lobe_ln(j, wi_unit, wo).min(f64::MAX.ln()).exp();
+            for c in 0..3 {
+                sum[c] += (lobe.albedo[c] * f).min(f64::MAX) * wi.z / p;
+            }
+        }
+    }
+    let nf = n as f64;
+    Some(sums.into_iter().map(|s| s.map(|v| v / nf)).collect())
 }
 
 /// Cells per side of the deterministic quadrature of a reciprocal lobe's albedo.
@@ -170,11 +241,26 @@ pub fn facet_term_albedo(shape: &super::ward::Shape<f64>, frame: glam::DQuat, wo
 /// `a(ω_o)` per channel of a reciprocal material by [`facet_term_albedo`] (`n × n` cells per facet
 /// term): `ρ_d + Σ_k ρ_k · mean over its facet terms`.
 pub fn facet_albedo(m: &Material, wo: DVec3, n: usize) -> [f64; 3] {
+    facet_albedo_of(m, &facet_lobe_terms(m, wo, n))
+}
+
+/// Each lobe's albedo per unit albedo at `ω_o`: the mean of [`facet_term_albedo`] over its facet
+/// terms (`n × n` cells each).
+pub fn facet_lobe_terms(m: &Material, wo: DVec3, n: usize) -> Vec<f64> {
+    m.lobes
+        .iter()
+        .map(|l| {
+            let (frames, count) = l.facet_frames();
+            let shape = l.shape();
+            frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64
+        })
+        .collect()
+}
+
+/// `ρ_d + Σ_k ρ_k t_k` per channel, `t_k` from [`facet_lobe_terms`].
+fn facet_albedo_of(m: &Material, terms: &[f64]) -> [f64; 3] {
     let mut a = m.diffuse;
-    for l in &m.lobes {
-        let (frames, count) = l.facet_frames();
-        let shape = l.shape();
-        let t: f64 = frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64;
+    for (l, &t) in m.lobes.iter().zip(terms) {
         for c in 0..3 {
             a[c] += l.albedo[c] * t;
         }
@@ -202,27 +288,119 @@ fn facet_work(m: &Material) -> u64 {
 /// [`facet_max_albedo`] under a [`Watch`] (one unit per view direction and lobe; `None` when
 /// stopped).
 pub fn facet_max_albedo_watched(m: &Material, watch: Watch<'_>) -> Option<MaxAlbedo> {
-    let dirs = facet_directions();
-    let best = dirs
+    facet_measure_watched(m, watch).map(|(best, _)| best)
+}
+
+/// The largest channel of the quadrature albedo at each of [`facet_directions`] (in its order), with
+/// each lobe's albedo in that channel there (`ρ_k[c] t_k`).
+fn facet_views_watched(m: &Material, watch: Watch<'_>) -> Option<Vec<(MaxAlbedo, Vec<f64>)>> {
+    facet_directions()
         .par_iter()
         .map(|&(t, p)| {
             if (watch.stop)() {
                 return None;
             }
-            let a = facet_albedo(m, direction(t.to_radians(), p.to_radians()), FACET_GRID);
+            let terms = facet_lobe_terms(m, direction(t.to_radians(), p.to_radians()), FACET_GRID);
+            let a = facet_albedo_of(m, &terms);
             (watch.advance)(m.lobes.len().max(1) as u64);
             let c = (1..3).fold(0, |best, c| if a[c] > a[best] { c } else { best });
-            Some(MaxAlbedo { value: a[c], std_err: 0.0, channel: c, theta_deg: t, phi_deg: p })
+            let lobes = m.lobes.iter().zip(&terms).map(|(l, &t)| l.albedo[c] * t).collect();
+            Some((MaxAlbedo { value: a[c], std_err: 0.0, channel: c, theta_deg: t, phi_deg: p }, lobes))
         })
-        .collect::<Option<Vec<_>>>()?
-        .into_iter()
+        .collect()
+}
+
+/// [`facet_max_albedo_watched`] and the albedo curve from the same quadrature.
+fn facet_measure_watched(m: &Material, watch: Watch<'_>) -> Option<(MaxAlbedo, AlbedoCurve)> {
+    let views = facet_views_watched(m, watch)?;
+    let best = views
+        .iter()
+        .map(|v| v.0)
         .fold(None::<MaxAlbedo>, |a, b| match a {
             Some(a) if a.value >= b.value => Some(a),
             _ => Some(b),
         })
         .expect("the view set is not empty");
     let coarse = facet_albedo(m, direction(best.theta_deg.to_radians(), best.phi_deg.to_radians()), FACET_GRID / 2);
-    Some(MaxAlbedo { std_err: (best.value - coarse[best.channel]).abs(), ..best })
+    let points = per_theta(&views, |v| v.0).into_iter().map(|i| AlbedoPoint::new(views[i].0, &views[i].1)).collect();
+    Some((MaxAlbedo { std_err: (best.value - coarse[best.channel]).abs(), ..best }, AlbedoCurve::new(points)))
+}
+
+/// The index of the largest view (the first of equals) at each polar angle of `views`, which run
+/// through [`THETA_SET_DEG`] in order, each angle's azimuths together.
+fn per_theta<T>(views: &[T], at: impl Fn(&T) -> MaxAlbedo) -> Vec<usize> {
+    let mut out: Vec<usize> = Vec::new();
+    for (i, v) in views.iter().enumerate() {
+        let a = at(v);
+        match out.last_mut() {
+            Some(j) if at(&views[*j]).theta_deg == a.theta_deg => {
+                if a.value > at(&views[*j]).value {
+                    *j = i;
+                }
+            }
+            _ => out.push(i),
+        }
+    }
+    out
+}
+
+/// The maximum directional albedo and its [`AlbedoCurve`] as [`Report::measure_watched`] measures
+/// them (the same numbers, bit for bit): by quadrature for the reciprocal model, by Monte Carlo with
+/// `samples` per direction for the paper's. `None` when stopped.
+pub fn albedo_curve_watched(m: &Material, samples: usize, watch: Watch<'_>) -> Option<(MaxAlbedo, AlbedoCurve)> {
+    if m.normalization == Normalization::Reciprocal {
+        facet_measure_watched(m, watch)
+    } else {
+        mc_measure_watched(m, samples, watch)
+    }
+}
+
+/// The most lobes an [`AlbedoPoint`] keeps one by one: the first this many of the material's (the
+/// total counts every lobe). A fixed number keeps the report a plain `Copy` value.
+pub const CURVE_LOBES: usize = 16;
+
+/// One view angle of an [`AlbedoCurve`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlbedoPoint {
+    /// The total directional albedo at its largest over the azimuths and channels at this `θ_o`, and
+    /// where (`std_err`: the Monte Carlo standard error; 0 for the quadrature).
+    pub total: MaxAlbedo,
+    lobes: [f64; CURVE_LOBES],
+    lobe_count: usize,
+}
+
+impl AlbedoPoint {
+    /// The point of `total`, keeping the first [`CURVE_LOBES`] of `lobes`.
+    pub fn new(total: MaxAlbedo, lobes: &[f64]) -> AlbedoPoint {
+        let lobe_count = lobes.len().min(CURVE_LOBES);
+        let mut kept = [0.0; CURVE_LOBES];
+        kept[..lobe_count].copy_from_slice(&lobes[..lobe_count]);
+        AlbedoPoint { total, lobes: kept, lobe_count }
+    }
+
+    /// Each lobe's directional albedo at the same direction, in the same channel: `ρ_k[c]` times
+    /// the lobe's albedo per unit albedo, for the first [`CURVE_LOBES`] lobes. For a material of at
+    /// most that many lobes they add up, with the diffuse albedo `ρ_d[c]` and in lobe order, to
+    /// `total.value`: exactly in the quadrature's arithmetic, to the rounding of the per-lobe sums
+    /// for Monte Carlo.
+    pub fn lobes(&self) -> &[f64] {
+        &self.lobes[..self.lobe_count]
+    }
+}
+
+/// The directional albedo against the view angle, one point per angle of [`THETA_SET_DEG`] (in its
+/// order), from the measurement of the report's maximum: the largest `total.value` is the report's
+/// `max_albedo.value`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlbedoCurve {
+    pub points: [AlbedoPoint; THETA_SET_DEG.len()],
+}
+
+impl AlbedoCurve {
+    /// The curve of one point per view angle, in [`THETA_SET_DEG`]'s order.
+    fn new(points: Vec<AlbedoPoint>) -> AlbedoCurve {
+        AlbedoCurve { points: points.try_into().expect("one point per angle of THETA_SET_DEG") }
+    }
 }
 
 /// Uniform direction on the upper hemisphere.
@@ -321,10 +499,12 @@ pub struct Report {
     pub sums: [f64; 3],
     pub bound: AlbedoBound,
     pub max_albedo: MaxAlbedo,
+    /// The directional albedo against `θ_o` from the same measurement (its maximum is `max_albedo`).
+    pub curve: AlbedoCurve,
     pub reciprocity: Reciprocity,
 }
 
-/// Reciprocity error below which a material counts as exactly reciprocal (issue: 1e-12).
+/// Reciprocity error below which a material counts as exactly reciprocal (docs/model.md, The verdict).
 pub const RECIPROCITY_EXACT: f64 = 1.0e-12;
 
 impl Report {
@@ -337,7 +517,9 @@ impl Report {
         let albedo = if m.normalization == Normalization::Reciprocal {
             facet_work(m)
         } else {
-            (albedo_directions(m).len() * samples) as u64
+            // The views, then the lobes at each polar angle's largest view.
+            let lobes = if m.lobes.is_empty() { 0 } else { THETA_SET_DEG.len() };
+            ((albedo_directions(m).len() + lobes) * samples) as u64
         };
         albedo + pairs as u64
     }
@@ -345,15 +527,12 @@ impl Report {
     /// [`Report::measure`] under a [`Watch`]; `None` when stopped.
     pub fn measure_watched(m: &Material, samples: usize, pairs: usize, watch: Watch<'_>) -> Option<Report> {
         let exact = m.normalization == Normalization::Reciprocal;
-        let max_albedo = if exact {
-            facet_max_albedo_watched(m, watch)?
-        } else {
-            max_directional_albedo_watched(m, samples, watch)?
-        };
+        let (max_albedo, curve) = albedo_curve_watched(m, samples, watch)?;
         Some(Report {
             sums: m.energy_sums(),
             bound: if exact { AlbedoBound::Exact } else { AlbedoBound::Measured },
             max_albedo,
+            curve,
             reciprocity: reciprocity_watched(m, pairs, 1, watch)?,
         })
     }

@@ -8,6 +8,7 @@ mod eval;
 mod export;
 mod measure;
 mod paint;
+mod plot;
 mod reference;
 mod render;
 mod scene;
@@ -168,6 +169,10 @@ enum Command {
     Report(Report),
     /// The Vulkan devices the renderer can use, and the one it picks.
     Devices,
+    /// Draw the editor's BRDF graphs as a PNG: `lobe3d` (f·cos θ_i over the hemisphere for one
+    /// light, a wireframe) or `albedo` (the directional albedo against the view angle, as `check`
+    /// measures it).
+    Plot(plot::PlotArgs),
     /// The headless main job: paint the embedded default strokes onto the scratch material, write the
     /// material, a canvas image and the energy report into a folder.
     Demo {
@@ -327,6 +332,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             paint::run(&strokes, material.as_deref(), &out, model.as_deref())
         }
         Some(Command::Export { material, format, out }) => export::run(&material, &format, &out),
+        Some(Command::Plot(args)) => plot::run(&args),
         Some(Command::Check { material, samples, pairs, json }) => check::run(&material, samples, pairs, json),
     }
 }

@@ -214,7 +214,7 @@ impl App {
                 egui::pos2(l.canvas_x as f32 / ppp, l.graph_y.min(l.height) as f32 / ppp),
                 egui::pos2(l.width as f32 / ppp, l.height as f32 / ppp),
             );
-            curves.paint(&ctx.layer_painter(egui::LayerId::background()), rect, log_graph);
+            graph::paint(ctx, curves, rect, log_graph);
         });
         egui_state.handle_platform_output(&gpu.window, output.platform_output);
         // A repaint the panel asks for (egui's delay; `Duration::MAX` means none).

@@ -1,13 +1,14 @@
 //! The tool panel (egui): first what an artist reads (frame time, the mesh view's samples per pixel,
 //! the material's verdict) and the status line; then brushes, split lobes, the file buttons (open,
 //! save as, export), normalisation, diffuse colour, the lobe list with editable albedo, αx, αy, φ and
-//! delete, the energy and reciprocity readouts, samples per pixel and exposure; last the per-pass GPU
-//! ms, folded under "GPU passes". It edits a copy of the material and reports what changed; the
+//! delete, the energy and reciprocity readouts with the plot of the directional albedo against the
+//! view angle, samples per pixel and exposure; last the per-pass GPU ms, folded under "GPU passes". It edits a copy of the material and reports what changed; the
 //! editor turns that into history steps (a drag is one step).
 
 use crate::brdf::energy::Report;
 use crate::brdf::{Material, Normalization, ALPHA_MAX, ALPHA_MIN};
 use crate::brush::BrushKind;
+use crate::plot::albedo::AlbedoPlot;
 
 /// The model's name in the panel.
 fn model_name(n: Normalization) -> &'static str {
@@ -59,6 +60,17 @@ fn summary(ui: &mut egui::Ui, m: &Material, info: &Info<'_>) {
         }
     }
 }
+
+/// The report's directional albedo against `θ_o` (the total at its largest over azimuths and
+/// channels, each lobe there, the energy sum's line), as wide as the panel.
+fn albedo_plot(ui: &mut egui::Ui, r: &Report) {
+    ui.label("directional albedo against θo: total (white), lobes, ρd + Σρk (grey)");
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width(), ALBEDO_PLOT_HEIGHT), egui::Sense::hover());
+    super::graph::paint_albedo(ui.painter(), rect, &AlbedoPlot::of_report(r));
+}
+
+/// The albedo plot's height in the panel (points).
+const ALBEDO_PLOT_HEIGHT: f32 = 110.0;
 
 /// What the user did in the panel this frame.
 #[derive(Default)]
@@ -238,6 +250,7 @@ pub fn show(
                     "reciprocity error: max {:.2e}, mean {:.2e}",
                     r.reciprocity.max_rel, r.reciprocity.mean_rel
                 ));
+                albedo_plot(ui, r);
             }
             ui.separator();
             ui.add(egui::Slider::new(spp, 1..=64).text("spp per lobe"));

@@ -1,5 +1,6 @@
 //! The energy report of the editor's material, computed off the UI thread (nothing slow runs on
-//! the UI thread). A stroke or slider edit asks for a new report and goes on at once; one worker
+//! the UI thread): the readouts of the tool panel and the curve of its albedo plot
+//! ([`crate::brdf::energy::AlbedoCurve`]), one measurement. A stroke or slider edit asks for a new report and goes on at once; one worker
 //! thread measures the newest material asked for (older requests still queued are skipped), and the
 //! panel shows the newest finished report, marked as updating while it is not the current
 //! material's. No window or GPU here: `on_done` (the editor passes a redraw request) is how the

@@ -148,9 +148,13 @@ pub const DISTANCE_RANGE: (f64, f64) = (1.2, 50.0);
 enum Drag {
     None,
     Stroke(Stroke),
-    Orbit { last: (f64, f64) },
+    Orbit {
+        last: (f64, f64),
+    },
     /// Shift-drag on the mesh view: the environment turns with the cursor.
-    TurnEnv { last: f64 },
+    TurnEnv {
+        last: f64,
+    },
     Light,
 }
 

@@ -262,8 +262,11 @@ fn a_scripted_session_paints_drops_resizes_minimises_and_refines_without_validat
 fn the_mesh_is_framed_in_its_view_at_every_window_shape() {
     let dir = tempfile::TempDir::new().unwrap();
     let d = |n: &str| dir.path().join(n);
-    std::fs::write(d("session.json"), r#"{"env_rotation": 0, "backdrop": {"shown": false, "brightness": 1, "blur": 0}}"#)
-        .unwrap();
+    std::fs::write(
+        d("session.json"),
+        r#"{"env_rotation": 0, "backdrop": {"shown": false, "brightness": 1, "blur": 0}}"#,
+    )
+    .unwrap();
     let bin = env!("CARGO_BIN_EXE_brdf-shop");
     for (w, h) in [(1280u32, 720u32), (720, 1280), (1920, 800)] {
         let run = Command::new("xvfb-run")
