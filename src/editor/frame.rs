@@ -184,7 +184,7 @@ impl App {
             format!("mesh view: mis {shown_refined} spp")
         };
         let mut spp = self.spp;
-        let (mut exposure, mut log_graph) = (state.exposure, state.log_graph);
+        let (mut exposure, mut log_graph, mut backdrop) = (state.exposure, state.log_graph, state.backdrop);
         let egui_state = self.egui_state.as_mut().expect("made in init");
         let raw_input = egui_state.take_egui_input(&gpu.window);
         let info = panel::Info {
@@ -205,7 +205,7 @@ impl App {
         let dialog = &mut self.dialog;
         let export_dialog = &mut self.export_dialog;
         let output = self.egui_ctx.run(raw_input, |ctx| {
-            actions = panel::show(ctx, &m, &info, &mut spp, &mut exposure, &mut log_graph);
+            actions = panel::show(ctx, &m, &info, &mut spp, &mut exposure, &mut backdrop, &mut log_graph);
             panel::dialog(ctx, dialog, &mut actions);
             export_dialog.open |= std::mem::take(&mut actions.open_export);
             actions.export = export::show(ctx, export_dialog);
@@ -222,6 +222,10 @@ impl App {
         self.egui_repaint = delay.and_then(|d| std::time::Instant::now().checked_add(d));
         let primitives = self.egui_ctx.tessellate(output.shapes, output.pixels_per_point);
         self.spp = spp.max(1);
+        if backdrop != state.backdrop {
+            // Through the input path, so the session keeps it as it keeps the keys' changes.
+            self.pending.push_back(Input::SetBackdrop(backdrop));
+        }
         (state.exposure, state.log_graph) = (exposure, log_graph);
         gpu.window.set_title(&format!("brdf-shop — {} — {quality} — {}", state.brush.name(), state.status));
         let capture = self.opts.screenshot.is_some() && self.done;

@@ -69,6 +69,17 @@ fn albedo_plot(ui: &mut egui::Ui, r: &Report) {
     super::graph::paint_albedo(ui.painter(), rect, &AlbedoPlot::of_report(r));
 }
 
+/// The backdrop's switch, brightness and blur (the B, `,`/`.` and `[`/`]` keys' settings).
+fn backdrop_controls(ui: &mut egui::Ui, b: &mut super::backdrop::Backdrop) {
+    use super::backdrop::{BLUR_RANGE, BRIGHTNESS_RANGE};
+    ui.checkbox(&mut b.shown, "backdrop: the map (B); off: black");
+    ui.add_enabled_ui(b.shown, |ui| {
+        let (lo, hi) = (BRIGHTNESS_RANGE.0.max(0.01), BRIGHTNESS_RANGE.1.min(100.0));
+        ui.add(egui::Slider::new(&mut b.brightness, lo..=hi).logarithmic(true).text("backdrop brightness"));
+        ui.add(egui::Slider::new(&mut b.blur, BLUR_RANGE.0..=BLUR_RANGE.1).step_by(0.25).text("backdrop blur"));
+    });
+}
+
 /// The albedo plot's height in the panel (points).
 const ALBEDO_PLOT_HEIGHT: f32 = 110.0;
 
@@ -129,13 +140,14 @@ fn colour(ui: &mut egui::Ui, label: &str, c: &mut [f64; 3]) -> bool {
     changed.inner
 }
 
-/// Draws the panel; `spp` and `exposure` are edited in place.
+/// Draws the panel; `spp`, `exposure` and the backdrop are edited in place.
 pub fn show(
     ctx: &egui::Context,
     m: &Material,
     info: &Info<'_>,
     spp: &mut u32,
     exposure: &mut f64,
+    backdrop: &mut super::backdrop::Backdrop,
     log_graph: &mut bool,
 ) -> Actions {
     let mut out = Actions::default();
@@ -255,6 +267,7 @@ pub fn show(
             ui.separator();
             ui.add(egui::Slider::new(spp, 1..=64).text("spp per lobe"));
             ui.add(egui::Slider::new(exposure, 0.05..=20.0).logarithmic(true).text("exposure"));
+            backdrop_controls(ui, backdrop);
             ui.checkbox(log_graph, "graph in log scale (G)");
             // The renderer's passes by their internal names, for whoever profiles it: folded.
             let total: f64 = info.timings.iter().map(|t| t.1).sum();
