@@ -243,19 +243,7 @@ fn blender_renders_what_reference_renders() {
         "args": ["--env", furnace, "--size", "32x32", "--spp", "16", "--save", blend, "--out", saved_render],
     }));
     jobs.push(serde_json::json!({"open": blend, "out": reopened}));
-    let job_file = d.join("jobs.json");
-    std::fs::write(&job_file, serde_json::to_string(&jobs).unwrap()).unwrap();
-    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/batch.py");
-    let t = std::time::Instant::now();
-    let out = Command::new(python()).arg(&harness).arg(&job_file).output().unwrap();
-    let cycles_seconds = t.elapsed().as_secs_f64();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "batch: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
-    let job_lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("JOB ")).collect();
-    assert_eq!(job_lines.len(), jobs.len(), "{stdout}");
-    for l in &job_lines {
-        assert_eq!(l.split_whitespace().nth(2), Some("0"), "{l}");
-    }
+    let (cycles_seconds, cpu) = run_batch(d, &jobs);
 
     let t = std::time::Instant::now();
     let mut failures = Vec::new();
@@ -291,9 +279,6 @@ fn blender_renders_what_reference_renders() {
             failures.push(format!("{}: {err:.4} against {}", c.label, c.tolerance));
         }
     }
-    // The harness prints the process's CPU time so far (all of Cycles' threads) on each job line.
-    let cpu: f64 =
-        job_lines.last().and_then(|l| l.split_whitespace().nth(4)).and_then(|v| v.parse().ok()).unwrap_or(0.0);
     println!(
         "  (Cycles: {} renders in one process, {cycles_seconds:.1} s wall, {cpu:.1} s CPU; reference {:.1} s wall)",
         jobs.len(),
@@ -315,26 +300,31 @@ fn blender_renders_what_reference_renders() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Runs `jobs` in one Blender process (`tests/blender/batch.py`, files in `d`), each of which must
+/// succeed; returns its wall time and its CPU time (all of Cycles' threads) in seconds.
+fn run_batch(d: &Path, jobs: &[serde_json::Value]) -> (f64, f64) {
+    let job_file = d.join("jobs.json");
+    std::fs::write(&job_file, serde_json::to_string(jobs).unwrap()).unwrap();
+    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/batch.py");
+    let t = std::time::Instant::now();
+    let out = Command::new(python()).arg(&harness).arg(&job_file).output().unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "batch: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
+    let job_lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("JOB ")).collect();
+    assert_eq!(job_lines.len(), jobs.len(), "{stdout}");
+    for l in &job_lines {
+        assert_eq!(l.split_whitespace().nth(2), Some("0"), "{l}");
+    }
+    // The harness prints the process's CPU time so far on each job line.
+    let cpu = job_lines.last().and_then(|l| l.split_whitespace().nth(4)).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    (seconds, cpu)
+}
+
 /// `brdf-shop reference` of `material` on the sphere under `env` turned by `deg` degrees
 /// (`--env-rotation`), at [`SIZE`], which must succeed.
 fn reference_turned(material: &Path, env: &Path, deg: &str, spp: u32, out: &Path) {
-    let (code, _, err) = common::run(&[
-        "reference",
-        "--material",
-        material.to_str().unwrap(),
-        "--env",
-        env.to_str().unwrap(),
-        &format!("--env-rotation={deg}"),
-        "--mesh",
-        "sphere",
-        "--size",
-        SIZE,
-        "--spp",
-        &spp.to_string(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "reference {}: {err}", out.display());
+    common::reference_turned(material, env, deg, "sphere", SIZE, spp, out);
 }
 
 /// The background of a turn that is not a whole number of texel columns (360°/W: 37° is 52.6
@@ -387,19 +377,7 @@ fn blender_env_rotation_turns_like_reference() {
         }));
         outs.push(out);
     }
-    let job_file = d.join("jobs.json");
-    std::fs::write(&job_file, serde_json::to_string(&jobs).unwrap()).unwrap();
-    let harness = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/batch.py");
-    let t = std::time::Instant::now();
-    let out = Command::new(python()).arg(&harness).arg(&job_file).output().unwrap();
-    let cycles_seconds = t.elapsed().as_secs_f64();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "batch: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
-    let job_lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("JOB ")).collect();
-    assert_eq!(job_lines.len(), jobs.len(), "{stdout}");
-    for l in &job_lines {
-        assert_eq!(l.split_whitespace().nth(2), Some("0"), "{l}");
-    }
+    let (cycles_seconds, cpu) = run_batch(d, &jobs);
 
     let t = std::time::Instant::now();
     let reference = |deg: &str| {
@@ -459,9 +437,6 @@ fn blender_env_rotation_turns_like_reference() {
             failures.push(format!("{label}: object {object:.4}, background {background:.4}: {verdict}"));
         }
     }
-    // The harness prints the process's CPU time so far (all of Cycles' threads) on each job line.
-    let cpu: f64 =
-        job_lines.last().and_then(|l| l.split_whitespace().nth(4)).and_then(|v| v.parse().ok()).unwrap_or(0.0);
     println!(
         "  (Cycles: {} renders in one process, {cycles_seconds:.1} s wall, {cpu:.1} s CPU; reference {:.1} s wall)",
         jobs.len(),

@@ -131,24 +131,7 @@ fn compare(
     let seconds = t.elapsed().as_secs_f64();
     assert!(out.status.success(), "{name} {map}: {}", String::from_utf8_lossy(&out.stderr));
     let reference = dir.join(format!("{name}-{map}-reference.exr"));
-    let (code, _, err) = common::run(&[
-        "reference",
-        "--material",
-        material.to_str().unwrap(),
-        "--env",
-        env.to_str().unwrap(),
-        "--env-rotation",
-        &turn.to_string(),
-        "--mesh",
-        "sphere",
-        "--size",
-        &size_arg,
-        "--spp",
-        &ref_spp.to_string(),
-        "--out",
-        reference.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "reference {name} {map}: {err}");
+    common::reference_turned(material, &env, &turn.to_string(), "sphere", &size_arg, ref_spp, &reference);
     let a = common::read_exr(&ours);
     let b = common::read_exr(&reference);
     let covered = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p[3] >= 0.5 && q[3] >= 0.5).count();

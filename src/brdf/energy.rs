@@ -36,6 +36,20 @@ pub struct Watch<'a> {
     pub stop: &'a (dyn Fn() -> bool + Sync),
 }
 
+impl Watch<'_> {
+    /// At sample `k` of `n`, every [`CHUNK`] samples: `false` when the watch says stop, else
+    /// advances it by the chunk's samples.
+    fn chunk(&self, k: usize, n: usize) -> bool {
+        if k % CHUNK == 0 {
+            if (self.stop)() {
+                return false;
+            }
+            (self.advance)(CHUNK.min(n - k) as u64);
+        }
+        true
+    }
+}
+
 fn no_advance(_: u64) {}
 
 fn never() -> bool {
@@ -70,11 +84,8 @@ pub fn directional_albedo_watched(m: &Material, wo: DVec3, n: usize, seed: u64, 
     let mut sum = [0.0f64; 3];
     let mut sum2 = [0.0f64; 3];
     for k in 0..n {
-        if k % CHUNK == 0 {
-            if (watch.stop)() {
-                return None;
-            }
-            (watch.advance)(CHUNK.min(n - k) as u64);
+        if !watch.chunk(k, n) {
+            return None;
         }
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
         let w = match sampler.sample(u0, 1.0 - u1, u2) {
@@ -191,11 +202,8 @@ pub fn directional_albedo_lobes_watched(
     let mut rng = Pcg32::new(seed, 0x5eed);
     let mut sums = vec![[0.0f64; 3]; m.lobes.len()];
     for k in 0..n {
-        if k % CHUNK == 0 {
-            if (watch.stop)() {
-                return None;
-            }
-            (watch.advance)(CHUNK.min(n - k) as u64);
+        if !watch.chunk(k, n) {
+            return None;
         }
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
         // The weight's own `ω_i` for the pdf and the cosine; the lobe terms take unit inputs.

@@ -72,11 +72,12 @@ fn albedo_plot(ui: &mut egui::Ui, r: &Report) {
 /// The backdrop's switch, brightness and blur (the B, `,`/`.` and `[`/`]` keys' settings).
 fn backdrop_controls(ui: &mut egui::Ui, b: &mut super::backdrop::Backdrop) {
     use super::backdrop::{BLUR_RANGE, BRIGHTNESS_RANGE};
-    ui.checkbox(&mut b.shown, "backdrop: the map (B); off: black");
+    // Short labels: the panel keeps its width only while every row fits in it.
+    ui.checkbox(&mut b.shown, "backdrop (B; off: black)");
     ui.add_enabled_ui(b.shown, |ui| {
         let (lo, hi) = (BRIGHTNESS_RANGE.0.max(0.01), BRIGHTNESS_RANGE.1.min(100.0));
-        ui.add(egui::Slider::new(&mut b.brightness, lo..=hi).logarithmic(true).text("backdrop brightness"));
-        ui.add(egui::Slider::new(&mut b.blur, BLUR_RANGE.0..=BLUR_RANGE.1).step_by(0.25).text("backdrop blur"));
+        ui.add(egui::Slider::new(&mut b.brightness, lo..=hi).logarithmic(true).text("its brightness"));
+        ui.add(egui::Slider::new(&mut b.blur, BLUR_RANGE.0..=BLUR_RANGE.1).step_by(0.25).text("its blur"));
     });
 }
 

@@ -263,12 +263,18 @@ pub fn export(format: &str, material: &Path, out: &Path) {
 /// `brdf-shop reference --material M --env E --mesh MESH --size WxH --spp N --out O`, which must
 /// succeed: the CPU image an exporter's render is compared with.
 pub fn reference(material: &Path, env: &Path, mesh: &str, size: &str, spp: u32, out: &Path) {
+    reference_turned(material, env, "0", mesh, size, spp, out);
+}
+
+/// [`reference`] with the map turned by `deg` degrees (`--env-rotation`).
+pub fn reference_turned(material: &Path, env: &Path, deg: &str, mesh: &str, size: &str, spp: u32, out: &Path) {
     let (code, _, err) = run(&[
         "reference",
         "--material",
         material.to_str().unwrap(),
         "--env",
         env.to_str().unwrap(),
+        &format!("--env-rotation={deg}"),
         "--mesh",
         mesh,
         "--size",

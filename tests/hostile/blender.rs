@@ -61,19 +61,6 @@ fn run_script(script: &Path, args: &[&str]) -> Run {
     finish(child, BLENDER_SECS, &what)
 }
 
-/// A FIFO at `p`, made without starting a process (the planting cases count process ids).
-fn mkfifo(p: &Path) {
-    use std::os::unix::ffi::OsStrExt;
-    let c = std::ffi::CString::new(p.as_os_str().as_bytes()).expect("a path without NUL");
-    // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
-    let rc = unsafe { libc::mkfifo(c.as_ptr(), 0o600) };
-    assert_eq!(rc, 0, "mkfifo {}: {}", p.display(), std::io::Error::last_os_error());
-}
-
-fn is_fifo(p: &Path) -> bool {
-    std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_fifo())
-}
-
 /// The next `n` process ids the kernel hands out (it counts up from the last one: the id of a child
 /// started here), for planting files at the names a writer that names them by its process id picks.
 fn next_pids(n: u32) -> std::ops::Range<u32> {

@@ -9,20 +9,6 @@ use std::process::{Command, Stdio};
 
 use super::support::*;
 
-/// A FIFO at `p`.
-fn mkfifo(p: &Path) {
-    use std::os::unix::ffi::OsStrExt;
-    let c = std::ffi::CString::new(p.as_os_str().as_bytes()).expect("a path without NUL");
-    // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
-    let rc = unsafe { libc::mkfifo(c.as_ptr(), 0o600) };
-    assert_eq!(rc, 0, "mkfifo {}: {}", p.display(), std::io::Error::last_os_error());
-}
-
-fn is_fifo(p: &Path) -> bool {
-    use std::os::unix::fs::FileTypeExt;
-    std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_fifo())
-}
-
 fn strokes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.strokes.json")
 }

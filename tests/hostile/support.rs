@@ -256,3 +256,18 @@ pub fn lying_exr(dir: &Path, name: &str, w: i32, h: i32) -> PathBuf {
     }
     write(dir, name, bytes)
 }
+
+/// A FIFO at `p`, made without starting a process (the planting cases count process ids).
+pub fn mkfifo(p: &Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(p.as_os_str().as_bytes()).expect("a path without NUL");
+    // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
+    let rc = unsafe { libc::mkfifo(c.as_ptr(), 0o600) };
+    assert_eq!(rc, 0, "mkfifo {}: {}", p.display(), std::io::Error::last_os_error());
+}
+
+/// Whether `p` is a FIFO (not followed if it is a link).
+pub fn is_fifo(p: &Path) -> bool {
+    use std::os::unix::fs::FileTypeExt;
+    std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_fifo())
+}

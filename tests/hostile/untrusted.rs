@@ -48,19 +48,6 @@ fn reference(env: &Path, mesh: &Path, out: &Path) -> Run {
     cpu(&["reference", "--env", s(env), "--mesh", s(mesh), "--size", "8x8", "--spp", "1", "--out", s(out)])
 }
 
-/// A FIFO at `p`, made without starting a process (the planting case counts process ids).
-fn mkfifo(p: &Path) {
-    use std::os::unix::ffi::OsStrExt;
-    let c = std::ffi::CString::new(p.as_os_str().as_bytes()).expect("a path without NUL");
-    // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
-    let rc = unsafe { libc::mkfifo(c.as_ptr(), 0o600) };
-    assert_eq!(rc, 0, "mkfifo {}: {}", p.display(), std::io::Error::last_os_error());
-}
-
-fn is_fifo(p: &Path) -> bool {
-    std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_fifo())
-}
-
 // ---------------------------------------------------------------------------------------------------
 // Mesh files: repeated PLY elements, expansion past the limits.
 
