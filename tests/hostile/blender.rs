@@ -128,9 +128,9 @@ fn blender_script_does_not_wait_on_fifos_planted_at_temporary_names() {
     planted(true);
 }
 
-/// Folders nothing can be written in, root included (/proc refuses a new entry, /sys refuses it
-/// with a permission error), a "folder" that is a file, a missing folder, and (when the test does
-/// not run as root, for whom permission bits stop nothing) a folder without write permission.
+/// Folders nothing can be written in, root included: a "folder" that is a file, a link that loops
+/// on itself, a missing folder; and (when the test does not run as root, for whom permission bits
+/// stop nothing) a folder without write permission. All are made in the test's own folder.
 #[test]
 fn blender_script_refuses_unwritable_output_folders_in_one_line() {
     let dir = tmp();
@@ -140,12 +140,13 @@ fn blender_script_refuses_unwritable_output_folders_in_one_line() {
     let locked = d.join("locked");
     std::fs::create_dir(&locked).unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let looped = d.join("loop");
+    std::os::unix::fs::symlink("loop", &looped).unwrap();
     let mut cases: Vec<(&str, PathBuf)> = vec![
-        ("--out", PathBuf::from("/proc/o.exr")),
-        ("--out", PathBuf::from("/sys/o.exr")),
-        ("--save", PathBuf::from("/proc/s.blend")),
-        ("--save", PathBuf::from("/sys/s.blend")),
+        ("--out", looped.join("o.exr")),
+        ("--save", looped.join("s.blend")),
         ("--out", file.join("o.exr")),
+        ("--save", file.join("s.blend")),
         ("--save", d.join("missing/s.blend")),
     ];
     // SAFETY: geteuid has no preconditions.
@@ -159,7 +160,7 @@ fn blender_script_refuses_unwritable_output_folders_in_one_line() {
     }
     assert_eq!(std::fs::read(&file).unwrap(), b"a file");
     assert_eq!(listing(&locked), Vec::<String>::new());
-    assert_eq!(listing(d), ["file", "locked", "m.brdf.json", "m.py"]);
+    assert_eq!(listing(d), ["file", "locked", "loop", "m.brdf.json", "m.py"]);
 }
 
 /// Output names of 250 and 255 bytes (the longest a file name may be) are written: the temporary
@@ -185,8 +186,9 @@ fn blender_script_writes_output_names_of_255_bytes() {
     assert_eq!(listing(&outs), [blend]);
 }
 
-/// Outputs that are FIFOs, devices (through a symlink: `--out` must end in .exr) or folders are
-/// refused before any work, and stay what they are.
+/// Outputs that are FIFOs, links to a FIFO, devices (a null device made in the test's folder, when
+/// the test runs as root, who may make one) or folders are refused before any work, and stay what
+/// they are.
 #[test]
 fn blender_script_refuses_outputs_that_are_not_regular_files() {
     let dir = tmp();
@@ -195,27 +197,44 @@ fn blender_script_refuses_outputs_that_are_not_regular_files() {
     for name in ["pipe.exr", "pipe.blend"] {
         mkfifo(&d.join(name));
     }
-    for name in ["null.exr", "null.blend"] {
-        std::os::unix::fs::symlink("/dev/null", d.join(name)).unwrap();
+    for (link, to) in [("link.exr", "pipe.exr"), ("link.blend", "pipe.blend")] {
+        std::os::unix::fs::symlink(to, d.join(link)).unwrap();
     }
     std::fs::create_dir(d.join("folder.exr")).unwrap();
-    let cases = [
+    let mut cases = vec![
         ("--out", "pipe.exr", "regular file"),
         ("--save", "pipe.blend", "regular file"),
-        ("--out", "null.exr", "regular file"),
-        ("--save", "null.blend", "regular file"),
+        ("--out", "link.exr", "regular file"),
+        ("--save", "link.blend", "regular file"),
         ("--out", "folder.exr", "folder"),
     ];
+    let mut want = vec!["folder.exr", "link.blend", "link.exr", "m.brdf.json", "m.py", "pipe.blend", "pipe.exr"];
+    // SAFETY: geteuid has no preconditions.
+    let root = unsafe { libc::geteuid() } == 0;
+    if root {
+        for name in ["null.exr", "null.blend"] {
+            let c = std::ffi::CString::new(s(&d.join(name))).unwrap();
+            // SAFETY: `c` is a valid NUL-terminated path that outlives the call; (1, 3) is the null
+            // device, which takes writes and keeps nothing.
+            let rc = unsafe { libc::mknod(c.as_ptr(), libc::S_IFCHR | 0o666, libc::makedev(1, 3)) };
+            assert_eq!(rc, 0, "mknod {name}: {}", std::io::Error::last_os_error());
+        }
+        cases.extend([("--out", "null.exr", "regular file"), ("--save", "null.blend", "regular file")]);
+        want.extend(["null.blend", "null.exr"]);
+        want.sort();
+    }
     for (flag, name, why) in cases {
         let path = d.join(name);
         refused(&run_script(&py, &[flag, s(&path)]), 1, &[flag, s(&path), why]);
     }
     assert!(is_fifo(&d.join("pipe.exr")) && is_fifo(&d.join("pipe.blend")));
-    for name in ["null.exr", "null.blend"] {
-        assert_eq!(std::fs::read_link(d.join(name)).unwrap(), Path::new("/dev/null"));
+    for (link, to) in [("link.exr", "pipe.exr"), ("link.blend", "pipe.blend")] {
+        assert_eq!(std::fs::read_link(d.join(link)).unwrap(), Path::new(to));
     }
-    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device(), "/dev/null was replaced");
-    let want = ["folder.exr", "m.brdf.json", "m.py", "null.blend", "null.exr", "pipe.blend", "pipe.exr"];
+    for name in ["null.exr", "null.blend"].into_iter().filter(|_| root) {
+        let kind = std::fs::symlink_metadata(d.join(name)).unwrap().file_type();
+        assert!(kind.is_char_device(), "{name} was replaced");
+    }
     assert_eq!(listing(d), want);
     assert_eq!(listing(&d.join("folder.exr")), Vec::<String>::new());
 }
