@@ -44,6 +44,16 @@ pub fn encode(path: &Path, width: u32, height: u32, pixels: &[[f32; 4]], exposur
     encode_view(path, width, height, pixels, exposure, exposure)
 }
 
+/// Scales the backdrop of a mesh view (the pixels off the object, alpha < ½) by `brightness`: the
+/// image then holds the map's radiance times it there, as `encode_view` expects.
+pub fn scale_backdrop(pixels: &mut [[f32; 4]], brightness: f64) {
+    for p in pixels.iter_mut().filter(|p| p[3] < 0.5) {
+        for c in &mut p[..3] {
+            *c = (*c as f64 * brightness) as f32;
+        }
+    }
+}
+
 /// [`encode`] of a mesh view whose backdrop has its own brightness: a PNG scales the object's
 /// pixels (alpha ≥ ½) by `exposure` and the backdrop's (alpha < ½) by `backdrop_exposure`.
 pub fn encode_view(

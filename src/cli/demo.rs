@@ -78,11 +78,7 @@ fn render_mesh(m: &Material) -> anyhow::Result<Vec<u8>> {
     };
     let mut image = renderer.render(m, &settings)?.image;
     let brightness = look.scale(backdrop::auto_brightness(&env));
-    for p in image.pixels.iter_mut().filter(|p| p[3] < 0.5) {
-        for c in &mut p[..3] {
-            *c = (*c as f64 * brightness) as f32;
-        }
-    }
+    brdf_shop::imageio::scale_backdrop(&mut image.pixels, brightness);
     let exposure = lighting::auto_exposure(&env);
     Ok(brdf_shop::imageio::encode_view(std::path::Path::new("mesh.png"), w, h, &image.pixels, exposure, 1.0)?)
 }

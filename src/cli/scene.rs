@@ -287,11 +287,7 @@ pub fn write_outputs(
     // a PNG shows it as it is, the object at the exposure.
     let backdrop = scene.backdrop.filter(|_| scene.settings.view == View::Mesh);
     if let Some(b) = backdrop {
-        for p in image.pixels.iter_mut().filter(|p| p[3] < 0.5) {
-            for c in &mut p[..3] {
-                *c = (*c as f64 * b) as f32;
-            }
-        }
+        brdf_shop::imageio::scale_backdrop(&mut image.pixels, b);
     }
     let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
     let backdrop_exposure = if backdrop.is_some() { 1.0 } else { args.exposure };
