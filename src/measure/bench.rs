@@ -409,16 +409,16 @@ fn variants(r: &mut Renderer, plan: &Plan, rows: &mut Rows, sphere: &Mesh) -> Re
         rows.add("estimator", e.name().to_string(), triangles, measure(r, &four, &s, warm, plan.repeats)?)?;
     }
     for vec4 in [true, false] {
-        r.scalar_lobes = !vec4;
+        r.options.scalar_lobes = !vec4;
         let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-        r.scalar_lobes = false;
+        r.options.scalar_lobes = false;
         rows.add("vec4", (if vec4 { "vec4" } else { "scalar" }).to_string(), triangles, m?)?;
     }
     // The G-buffer with the faces the closed sphere hides skipped, and with every face drawn.
     for cull in [true, false] {
-        r.cull_hidden_faces = cull;
+        r.options.cull_hidden_faces = cull;
         let m = measure(r, &four, &settings(plan.size, 8), warm, plan.repeats);
-        r.cull_hidden_faces = true;
+        r.options.cull_hidden_faces = true;
         rows.add("culling", (if cull { "hidden culled" } else { "all faces" }).to_string(), triangles, m?)?;
     }
     for &(seg, rings) in &plan.tessellations {

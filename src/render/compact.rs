@@ -55,27 +55,7 @@ pub const LIST_READ: barrier::Scope = (
     ),
 );
 
-/// How the pass starts the listed pixels of the frame's image.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Start {
-    /// (0, 0, 0, 1) plus the diffuse term (`Some`: the albedo, and whether the `key` estimator's
-    /// lights are added).
-    Here(Option<([f64; 3], bool)>),
-    /// (0, 0, 0, 1) from a clear, the diffuse term left to the frame's sparse filter
-    /// (`DenoisePass::record`'s `diffuse`), which reads and writes every listed pixel anyway: a
-    /// full-size image store less (`compact.comp` LATER); the background left to the background pass
-    /// over the blocks with a pixel off the object, which this one lists
-    /// (`BackgroundPass::record_blocks`, after it). `pixels`: whether the list of pixels is
-    /// written too (a frame whose passes all run over the blocks leaves it empty, `Targets::pixels_listed`).
-    Later { pixels: bool },
-}
-
-impl Start {
-    /// Whether the pass lists the pixels (it always lists the blocks).
-    pub fn lists_pixels(self) -> bool {
-        !matches!(self, Start::Later { pixels: false })
-    }
-}
+pub use super::plan::Start;
 
 pub struct CompactPass {
     /// `Start::Here`, `Start::Later` with the pixels listed, and without (`compact.comp`'s LATER

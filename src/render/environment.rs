@@ -3,14 +3,12 @@
 //! importance-sampling tables, and the key lights split off the map with the residual's own texture and
 //! SH (the `key` estimator). Built once per environment and kept until it changes.
 
-use std::cell::RefCell;
-use std::collections::HashMap;
-
 use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
 use super::gpu;
+use super::plan::KeyLightSet;
 use crate::scene::env::{Environment, MipLevel};
 use crate::scene::keylight::{self, KeyLights};
 use crate::vk::{image, Buffer, Context, Image};
@@ -83,54 +81,6 @@ fn point_set(ctx: &Context, rows: &[[f32; 8]], name: &str) -> Result<Buffer> {
     Buffer::upload(ctx, &gpu::light_set_bytes(rows), vk::BufferUsageFlags::UNIFORM_BUFFER, name)
 }
 
-/// A lobe's tiles (`keylight::tiles::tile_points`), or `None` where they do not fit.
-type Tiles = Option<keylight::tiles::TileSet>;
-
-/// What a lobe's tiles are made for: the cut's roughness bits ([`Cut`]), the point allowance and
-/// the lights.
-type TilesKey = ((u64, u64), usize, TileLights);
-
-/// Which lights a lobe's tiles are made of ([`GpuKeyLights::tiles`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum TileLights {
-    /// The key lights.
-    Key,
-    /// The key and wide lights together (`GpuWideLights::all`).
-    KeyAndWide,
-    /// The key lights' tiles, then each wide light as its own four points
-    /// (`lobe::sees_wide_lights_as_points`).
-    KeyAndWidePoints,
-}
-
-/// How a lobe's tiles cut the lights ([`GpuKeyLights::tiles`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Cut {
-    /// Round tiles for a lobe of this roughness (`keylight::tiles::tile_alpha`).
-    Tiles(f64),
-    /// Strips across the narrow axis of a lobe of these narrow and wide roughnesses
-    /// (`keylight::strips`).
-    Strips(f64, f64),
-}
-
-impl Cut {
-    fn key(self) -> (u64, u64) {
-        match self {
-            Cut::Tiles(a) => (a.to_bits(), 0),
-            Cut::Strips(n, w) => (n.to_bits(), w.to_bits()),
-        }
-    }
-
-    fn points(self, lights: &[keylight::KeyLight], max_points: usize) -> Tiles {
-        match self {
-            Cut::Tiles(a) => keylight::tiles::tile_points(lights, a, max_points),
-            Cut::Strips(n, w) => keylight::strips::strip_points(lights, n, w, max_points),
-        }
-    }
-}
-
-/// How many lobes' tiles a map keeps (`GpuKeyLights::tiles`; all are dropped when it is full).
-const TILES_KEPT: usize = 1024;
-
 /// The key lights of a map on the GPU (the `key` estimator): the residual map (lights replaced by
 /// their local background) with its mip chain and SH, and the lights' cones. Absent when the map has
 /// no key light.
@@ -149,14 +99,10 @@ pub struct GpuKeyLights {
     pub sampling: keylight::LightSampling,
     /// The lights' quadrature points (`keylight::point_table`), for lobes much wider than the lights.
     pub points: Buffer,
-    /// The lights, as detected.
-    pub lights: Vec<keylight::KeyLight>,
-    /// The wide lights beside them (`keylight::WideLights`), if the map has any.
+    /// The wide lights' buffers, if the map has any.
     pub wide: Option<GpuWideLights>,
-    /// The tiles made so far (`keylight::tiles`), by lobe roughness, point allowance and whether
-    /// they cut the wide lights too: a frame asks for them per lobe, and an edit changes one lobe
-    /// at a time.
-    tiles: RefCell<HashMap<TilesKey, Tiles>>,
+    /// The key and wide lights as the frame's plan sees them, with their tiles.
+    pub set: KeyLightSet,
 }
 
 /// The wide lights on the GPU: the residual map without them (and without the key lights), and
@@ -167,13 +113,9 @@ pub struct GpuWideLights {
     pub points: Buffer,
     /// How many points `points` holds (four per light).
     pub count: u32,
-    /// The wide lights, as detected.
-    pub lights: Vec<keylight::KeyLight>,
-    /// The key lights and the wide lights, in that order (what `points` and wide tiles are made of).
-    pub all: Vec<keylight::KeyLight>,
-    /// [`cone_table`] of `all`, for the reach test of a lobe that sees them all as tiles; `None`
-    /// where they are more than the test's slots (`keylight::MAX_LIGHTS`, `lobe.comp`'s
-    /// `MAX_LIGHTS`): such a lobe takes no reach test.
+    /// [`cone_table`] of the key and wide lights (`WideLightSet::all`), for the reach test of a
+    /// lobe that sees them all as tiles; `None` where they are more than the test's slots
+    /// (`WideLightSet::reach_testable`): such a lobe takes no reach test.
     pub cones: Option<Buffer>,
 }
 
@@ -188,7 +130,7 @@ impl GpuWideLights {
                 return Err(e);
             }
         };
-        let cones = if all.len() <= keylight::MAX_LIGHTS {
+        let cones = if all.len() <= crate::scene::keylight::MAX_LIGHTS {
             match storage(ctx, &cone_table(&all), "keylights.wide.cones") {
                 Ok(c) => Some(c),
                 Err(e) => {
@@ -201,7 +143,7 @@ impl GpuWideLights {
             None
         };
         let count = 4 * all.len() as u32;
-        Ok(GpuWideLights { residual, points, count, lights: wide.lights.clone(), all, cones })
+        Ok(GpuWideLights { residual, points, count, cones })
     }
 
     fn destroy(self, ctx: &Context) {
@@ -277,33 +219,6 @@ fn or_destroy<T>(ctx: &Context, result: Result<T>, made: Vec<Buffer>) -> Result<
 }
 
 impl GpuKeyLights {
-    /// The tiles or strips (`cut`) for a lobe, at most `max_points` points a pixel, of the lights
-    /// `which` says (`None` for the wide lights on a map without any), made once per map (at most
-    /// `TILES_KEPT` kept).
-    pub fn tiles(&self, cut: Cut, max_points: usize, which: TileLights) -> Tiles {
-        let key = (cut.key(), max_points, which);
-        if let Some(made) = self.tiles.borrow().get(&key) {
-            return made.clone();
-        }
-        let made = match (which, &self.wide) {
-            (TileLights::Key, _) => cut.points(&self.lights, max_points),
-            (TileLights::KeyAndWide, Some(w)) => cut.points(&w.all, max_points),
-            (TileLights::KeyAndWidePoints, Some(w)) => {
-                let left = max_points.checked_sub(4 * w.lights.len())?;
-                let made = cut.points(&self.lights, left).map(|t| t.and_points(&w.lights));
-                // The wide lights' points fit the block too.
-                made.filter(|t| t.rows.len() <= keylight::tiles::MAX_BLOCK_POINTS)
-            }
-            (_, None) => return None,
-        };
-        let mut kept = self.tiles.borrow_mut();
-        if kept.len() >= TILES_KEPT {
-            kept.clear();
-        }
-        kept.insert(key, made.clone());
-        made
-    }
-
     /// The light samples of frame `seed` (`M = samples`): frame 0 takes the middle of each stratum,
     /// a later frame shifts the strata and the points within texels by a hash of its seed.
     pub fn frame_samples(&self, samples: u32, seed: u32) -> Vec<[f32; 8]> {
@@ -345,9 +260,8 @@ impl GpuKeyLights {
             Ok(b) => b,
             Err(_) => unreachable!("the closure pushed three buffers before succeeding"),
         };
-        let lights = keys.lights.clone();
-        let tiles = RefCell::default();
-        let mut gpu = GpuKeyLights { residual, sh, cones, texels, sampling, points, lights, wide: None, tiles };
+        let set = KeyLightSet::new(keys.lights.clone(), keys.wide.as_ref().map(|w| w.lights.clone()));
+        let mut gpu = GpuKeyLights { residual, sh, cones, texels, sampling, points, wide: None, set };
         if let Some(w) = &keys.wide {
             match GpuWideLights::new(ctx, keys, w) {
                 Ok(g) => gpu.wide = Some(g),

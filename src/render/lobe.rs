@@ -438,9 +438,9 @@ impl LobePass {
             })?;
         }
         if let Some(k) = keys.filter(|_| variant.reach) {
-            let tested = match &k.wide {
+            let tested = match &k.set.wide {
                 Some(w) if variant.wide => w.all.len(),
-                _ => k.lights.len(),
+                _ => k.set.lights.len(),
             };
             if tested != usize::from(variant.light_slots) {
                 return Err(crate::Error::Validation(format!(

@@ -51,7 +51,7 @@ pub use settings::{
     check_limits, key_light_samples, Estimator, Frame, Progress, Recorded, Settings, View, MAX_PIXELS, MAX_SPP,
 };
 
-struct Passes {
+pub(crate) struct Passes {
     gbuffer: gbuffer::GBufferPass,
     background: background::BackgroundPass,
     compact: compact::CompactPass,
@@ -102,58 +102,19 @@ impl Passes {
 
 /// Owns the context and every GPU object of the renderer; dropped passes first, context last.
 pub struct Renderer {
-    /// Run the lobe passes one sample at a time instead of four (the benchmark's baseline).
-    pub scalar_lobes: bool,
     /// Time each pass of a frame (`Frame::timings`, `--timings`, `bench`, the editor's panel) besides
     /// the whole frame; false times the whole frame alone (`Frame::timings` empty), as the
     /// error-vs-time sweep does: two timestamps a frame instead of two a pass (each a wait for the
     /// queue on lavapipe, `vk::query`).
     pub time_passes: bool,
-    /// Skip the faces a closed mesh hides from an eye outside it (`Mesh::hidden_faces`); the image
-    /// is the same either way (tests compare the two).
-    pub cull_hidden_faces: bool,
-    /// Let the `key` lobe passes of narrow lobes skip the key lights (and the wide lights they see
-    /// as tiles) at pixels whose lobe cannot reach them (`lobe::reach_test_pays`); the image is the
-    /// same either way (a test compares).
-    pub light_reach_test: bool,
-    /// Let the `key` lobe passes of lobes that see every key and wide light as points (or, with
-    /// `wide_tiles`, as tiles) take the wide lights off their residual map (`keylight::WideLights`);
-    /// false leaves them in it (a test compares the two).
-    pub wide_lights: bool,
-    /// Let the `key` lobe passes of lobes too narrow for the lights' own points see them as tiles
-    /// (`keylight::tiles`) where those fit; false keeps them on MIS light samples (tests compare).
-    pub light_tiles: bool,
-    /// Let the `key` lobe passes of anisotropic lobes of one component see the lights as strips
-    /// across their narrow axis (`keylight::strips`) where those run fewer points a pixel than the
-    /// round tiles; false keeps the round tiles (a test compares the two).
-    pub light_strips: bool,
-    /// Let the `key` lobe passes that see the key lights as points or tiles but the wide lights not
-    /// as points take the key and wide lights as tiles together, where those fit, and sample the
-    /// residual without both, in frames of at least [`lobe::WIDE_TILES_MIN_SPP`] samples (with
-    /// `wide_lights` and `light_tiles` set), and otherwise (fewer samples, or tiles that do not fit)
-    /// the lobes that [`lobe::sees_wide_lights_as_points`] admits take the wide lights as their own
-    /// points; false keeps the wide lights in their residual (a test compares the two).
-    pub wide_tiles: bool,
-    /// Let the `key` lobe passes of rough lobes go through the normal-weighted filter (`denoise`);
-    /// false leaves them unfiltered (a test compares the two).
-    pub denoise: bool,
-    /// Stratify the per-pixel shifts of a filtered lobe pass of up to 4 samples over the filter's
-    /// window (`glsl/lobe.comp`); false takes a hash per pixel at every count (a test compares).
-    /// Dense frames only: a sparse frame's blocks are always stratified over its window.
-    pub stratified_shifts: bool,
-    /// Let frames of up to [`denoise::SPARSE_MAX_SPP`] samples sample the filtered lobes once per
-    /// 2 × 2 block of pixels (`denoise::sparse`); false samples every pixel (a test compares).
-    pub sparse_filter: bool,
-    /// Draw every lobe pass with the pipeline of every output (`lobe::Output::Any`), the editor's
-    /// stand-in while a view's own pipeline is built; false (the default) with the view's own (a test
-    /// compares the two).
-    pub any_output_lobes: bool,
+    /// The choices a user may compare (`plan::Options`); the defaults are the measured better ones.
+    pub options: plan::Options,
     /// Build new lobe pipelines on threads of their own, calling this when one is ready (the
     /// editor); `None` builds them at once (headless commands).
     pub build_in_background: Option<lobe::Notify>,
-    /// How frames start and zero their images on this device (`plan::FramePlan::from_env`); a test
+    /// How frames start and zero their images on this device (`plan::DevicePlan::from_env`); a test
     /// forces the GPU plan on lavapipe and compares the images.
-    pub frame_plan: plan::FramePlan,
+    pub device_plan: plan::DevicePlan,
     /// The `key` estimator's frame seed: frames with different seeds rotate their sequences
     /// differently, so their mean converges (progressive refinement).
     pub seed: u32,
@@ -196,20 +157,10 @@ impl Renderer {
             }
         };
         Ok(Renderer {
-            scalar_lobes: false,
             time_passes: true,
-            cull_hidden_faces: true,
-            light_reach_test: true,
-            wide_lights: true,
-            light_tiles: true,
-            light_strips: true,
-            wide_tiles: true,
-            denoise: true,
-            sparse_filter: true,
-            any_output_lobes: false,
-            stratified_shifts: true,
+            options: plan::Options::default(),
             seed: 0,
-            frame_plan: plan::FramePlan::from_env(ctx.device.kind),
+            device_plan: plan::DevicePlan::from_env(ctx.device.kind),
             build_in_background: None,
             passes: Some(passes),
             env: None,

@@ -1,6 +1,6 @@
 //! The zero pass: zeroes the images the lobe passes add into (the sparse filter's cells and their
 //! lights, or the rough lobes' image) with a compute dispatch, where the frame plan
-//! ([`super::plan::FramePlan::zero_by_compute`]) prefers it to a transfer clear.
+//! ([`super::plan::DevicePlan::zero_by_compute`]) prefers it to a transfer clear.
 
 use ash::vk;
 

@@ -26,9 +26,9 @@ fn filtering_rough_lobes_cuts_their_noise_and_keeps_converging() {
             failures.push(format!("{map}: no denoise pass in {names:?}"));
         }
         let filtered = compare(1.0, &mut r, &format!("denoise-{map}-8"), &m, &e, SIZE, 8, Estimator::Key, REF_SPP);
-        r.denoise = false;
+        r.options.denoise = false;
         let unfiltered = compare(1.0, &mut r, &format!("raw-{map}-8"), &m, &e, SIZE, 8, Estimator::Key, REF_SPP);
-        r.denoise = true;
+        r.options.denoise = true;
         if !(filtered < 0.08 && filtered < (2.0 / 3.0) * unfiltered) {
             failures.push(format!("{map} at 8 spp: {filtered:.4} filtered, {unfiltered:.4} unfiltered"));
         }
@@ -78,9 +78,9 @@ fn sparse_filtering_keeps_small_frames_within_the_goal() {
                 failures.push(format!("{map}, {size}², {spp} spp: no {want} pass in {got:?}"));
             }
         }
-        r.sparse_filter = false;
+        r.options.sparse_filter = false;
         let got = names(&mut r, SIZE_64, 8);
-        r.sparse_filter = true;
+        r.options.sparse_filter = true;
         if !got.iter().any(|n| n == "denoise") {
             failures.push(format!("{map}: sparse filter off, no dense denoise pass in {got:?}"));
         }
@@ -138,9 +138,9 @@ fn larger_views_filter_narrower_lobes() {
         }
         let cpu = reference::render_mesh(&m, &e, &mesh, &Camera::default(), SIZE_128, SIZE_128, 2048, false);
         let mut err = |r: &mut Renderer, spp: u32, sparse: bool| {
-            r.sparse_filter = sparse;
+            r.options.sparse_filter = sparse;
             let frame = r.render(&m, &settings(SIZE_128, spp, Estimator::Key)).unwrap();
-            r.sparse_filter = true;
+            r.options.sparse_filter = true;
             let filtered = frame.timings.iter().any(|t| t.name.starts_with("denoise[sparse"));
             if filtered != sparse {
                 failures.push(format!("{map}, {spp} spp, sparse {sparse}: passes {:?}", frame.timings));
@@ -188,9 +188,9 @@ fn stratified_shifts_beat_a_hash_per_pixel_at_one_sample() {
         let cpu = reference::render_mesh(&m, &e, &mesh, &s.camera, SIZE_64, SIZE_64, 2048, false);
         let mut mean = [0.0f64; 2];
         // The dense filter's shifts (a 64² frame of 1 spp would otherwise be sparse).
-        r.sparse_filter = false;
+        r.options.sparse_filter = false;
         for (k, strata) in [true, false].into_iter().enumerate() {
-            r.stratified_shifts = strata;
+            r.options.stratified_shifts = strata;
             for seed in 0..SEEDS {
                 r.seed = seed;
                 let gpu = r.render(&m, &s).unwrap().image;
@@ -198,8 +198,8 @@ fn stratified_shifts_beat_a_hash_per_pixel_at_one_sample() {
                 mean[k] += reference::relative_l1(&gpu, &cpu).expect("the sphere covers pixels") / f64::from(SEEDS);
             }
         }
-        r.stratified_shifts = true;
-        r.sparse_filter = true;
+        r.options.stratified_shifts = true;
+        r.options.sparse_filter = true;
         r.seed = 0;
         eprintln!("{map}: 1 spp, mean of {SEEDS} seeds: stratified {:.4}, hash per pixel {:.4}", mean[0], mean[1]);
         if !(mean[0] < mean[1]) {

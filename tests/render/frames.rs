@@ -154,9 +154,9 @@ fn culling_hidden_faces_leaves_the_image_unchanged() {
         // From the side (the hemisphere shows its inside) and from above.
         for eye in [DVec3::new(3.0, 0.5, 0.2), DVec3::new(0.3, 3.5, 1.0)] {
             let s = Settings { camera: Camera { eye, ..Camera::default() }, ..settings(48, 4, Estimator::Fis) };
-            r.cull_hidden_faces = true;
+            r.options.cull_hidden_faces = true;
             let culled = r.render(m, &s).unwrap().image;
-            r.cull_hidden_faces = false;
+            r.options.cull_hidden_faces = false;
             let all = r.render(m, &s).unwrap().image;
             // Pixels that differ, and the largest relative difference among them.
             let differ: Vec<f32> = culled
@@ -388,11 +388,11 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
         ("bench", &bench, 48, "denoise"),
     ] {
         let s = settings(size, 8, Estimator::Key);
-        r.any_output_lobes = false;
+        r.options.any_output_lobes = false;
         let own = r.render(m, &s).unwrap();
-        r.any_output_lobes = true;
+        r.options.any_output_lobes = true;
         let any = r.render(m, &s).unwrap();
-        r.any_output_lobes = false;
+        r.options.any_output_lobes = false;
         let names: Vec<&str> = own.timings.iter().map(|t| t.name.as_str()).collect();
         assert!(names.contains(&filter), "{name} at {size}²: {names:?}");
         // The lobes with their light term at each pixel see the lights as points (`block_points`).
@@ -409,7 +409,7 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// The GPU frame plan (`render::plan::FramePlan::GPU`: the compact pass starts every pixel, the
+/// The GPU frame plan (`render::plan::DevicePlan::GPU`: the compact pass starts every pixel, the
 /// filter's images zeroed by a compute pass, a kept G-buffer's background and diffuse image drawn
 /// again instead of copied), forced on lavapipe, draws the CPU plan's images. Frames that keep the
 /// G-buffer match bit for bit (both plans draw the kept image in the compact pass, or copy what it
@@ -419,8 +419,8 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
 /// term and background make at most 6 reassociated additions, each off by at most 1 ulp of the
 /// largest partial sum: 8 ε of the pixel's value bounds the difference.
 #[test]
-fn the_gpu_frame_plan_draws_the_cpu_plans_images() {
-    use brdf_shop::render::plan::FramePlan;
+fn the_gpu_device_plan_draws_the_cpu_plans_images() {
+    use brdf_shop::render::plan::DevicePlan;
     let mut r = renderer();
     r.set_environment(&env("studio.exr")).unwrap();
     r.set_mesh(&Mesh::sphere()).unwrap();
@@ -432,13 +432,13 @@ fn the_gpu_frame_plan_draws_the_cpu_plans_images() {
         assert_eq!(sparse, size == 128, "the cases are a sparse and a dense frame");
         let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
         let mut runs = Vec::new();
-        for plan in [FramePlan::CPU, FramePlan::GPU] {
-            r.frame_plan = plan;
+        for plan in [DevicePlan::CPU, DevicePlan::GPU] {
+            r.device_plan = plan;
             frame(&mut r, &bench, &moved);
             let frames = [frame(&mut r, &bench, &s), frame(&mut r, &bench, &s), frame(&mut r, &bench, &s)];
             runs.push(frames);
         }
-        r.frame_plan = FramePlan::for_device(r.ctx.device.kind);
+        r.device_plan = DevicePlan::for_device(r.ctx.device.kind);
         let [cpu, gpu] = [&runs[0], &runs[1]];
         let (drawn, kept, restored) = (&gpu[0].0, &gpu[1].0, &gpu[2].0);
         assert!(has(drawn, "gbuffer") && has(drawn, "zero") && !has(drawn, "background"), "{drawn:?}");

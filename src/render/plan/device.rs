@@ -12,7 +12,7 @@ use ash::vk;
 
 /// The choices of one device kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FramePlan {
+pub struct DevicePlan {
     /// A frame that rasterises and filters sparsely clears the accumulation image and leaves the
     /// diffuse term to the sparse filter and the background to a pass over the blocks off the
     /// object (`compact::Start::Later`); false: the compact pass writes every pixel of it, the
@@ -27,36 +27,36 @@ pub struct FramePlan {
     pub copy_base: bool,
 }
 
-impl FramePlan {
+impl DevicePlan {
     /// The plan of a CPU device: clears and copies.
-    pub const CPU: FramePlan = FramePlan { clear_then_later: true, zero_by_compute: false, copy_base: true };
+    pub const CPU: DevicePlan = DevicePlan { clear_then_later: true, zero_by_compute: false, copy_base: true };
 
     /// The plan of a GPU: compute passes write every image, no transfer clears or copies.
-    pub const GPU: FramePlan = FramePlan { clear_then_later: false, zero_by_compute: true, copy_base: false };
+    pub const GPU: DevicePlan = DevicePlan { clear_then_later: false, zero_by_compute: true, copy_base: false };
 
     /// The plan for a device of type `kind`.
-    pub fn for_device(kind: vk::PhysicalDeviceType) -> FramePlan {
+    pub fn for_device(kind: vk::PhysicalDeviceType) -> DevicePlan {
         if kind == vk::PhysicalDeviceType::CPU {
-            FramePlan::CPU
+            DevicePlan::CPU
         } else {
-            FramePlan::GPU
+            DevicePlan::GPU
         }
     }
 
     /// `BRDF_SHOP_FRAME_PLAN` (`cpu` or `gpu`) where set, else the plan for `kind`.
-    pub fn from_env(kind: vk::PhysicalDeviceType) -> FramePlan {
+    pub fn from_env(kind: vk::PhysicalDeviceType) -> DevicePlan {
         match std::env::var(ENV).as_deref() {
-            Ok("cpu") => FramePlan::CPU,
-            Ok("gpu") => FramePlan::GPU,
-            _ => FramePlan::for_device(kind),
+            Ok("cpu") => DevicePlan::CPU,
+            Ok("gpu") => DevicePlan::GPU,
+            _ => DevicePlan::for_device(kind),
         }
     }
 
     /// The plan's name (`cpu` or `gpu`; `mixed` for a hand-made one).
     pub fn name(&self) -> &'static str {
         match *self {
-            FramePlan::CPU => "cpu",
-            FramePlan::GPU => "gpu",
+            DevicePlan::CPU => "cpu",
+            DevicePlan::GPU => "gpu",
             _ => "mixed",
         }
     }
@@ -71,17 +71,17 @@ mod tests {
 
     #[test]
     fn cpu_devices_clear_and_copy_gpus_write_from_compute() {
-        let cpu = FramePlan::for_device(vk::PhysicalDeviceType::CPU);
-        assert_eq!(cpu, FramePlan { clear_then_later: true, zero_by_compute: false, copy_base: true });
+        let cpu = DevicePlan::for_device(vk::PhysicalDeviceType::CPU);
+        assert_eq!(cpu, DevicePlan { clear_then_later: true, zero_by_compute: false, copy_base: true });
         for gpu in [
             vk::PhysicalDeviceType::DISCRETE_GPU,
             vk::PhysicalDeviceType::INTEGRATED_GPU,
             vk::PhysicalDeviceType::VIRTUAL_GPU,
             vk::PhysicalDeviceType::OTHER,
         ] {
-            let p = FramePlan::for_device(gpu);
-            assert_eq!(p, FramePlan { clear_then_later: false, zero_by_compute: true, copy_base: false }, "{gpu:?}");
+            let p = DevicePlan::for_device(gpu);
+            assert_eq!(p, DevicePlan { clear_then_later: false, zero_by_compute: true, copy_base: false }, "{gpu:?}");
         }
-        assert_eq!((FramePlan::CPU.name(), FramePlan::GPU.name()), ("cpu", "gpu"));
+        assert_eq!((DevicePlan::CPU.name(), DevicePlan::GPU.name()), ("cpu", "gpu"));
     }
 }
