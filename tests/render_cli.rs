@@ -223,3 +223,56 @@ fn reference_writes_the_same_image_size() {
     let env = brdf_shop::scene::Environment::load(&o).expect("EXR");
     assert_eq!((env.width, env.height), (16, 12));
 }
+
+/// `render --plan` prints the frame's plan and renders nothing; with `--out` it renders as well and
+/// prints each pass's GPU time beside it, the same passes `--timings` names, whose JSON carries the
+/// plan.
+#[test]
+fn render_plan_prints_the_passes_and_what_is_left_out() {
+    let dir = TempDir::new().unwrap();
+    let material = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bench-4lobes.brdf.json");
+    let base = ["render", "--plan", "--material", material.to_str().unwrap(), "--env", &hdri("studio.exr")];
+    let sized = |size: &'static str| -> Vec<String> {
+        base.iter().map(|s| s.to_string()).chain(["--size".to_string(), size.to_string()]).collect()
+    };
+    let args = sized("64x64");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, stdout, stderr) = run(&args);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.starts_with("plan of the mesh view: 7 passes\n"), "{stdout}");
+    for pass in ["1. gbuffer", "2. clear", "3. lobe0[", "7. denoise[sparse,diffuse]"] {
+        assert!(stdout.contains(pass), "{pass}: {stdout}");
+    }
+    assert!(stdout.contains("left out:\n  - diffuse: drawn by the sparse filter"), "{stdout}");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "a plan writes no file");
+    // The canvas view is one pass.
+    let mut canvas = args.clone();
+    canvas.extend(["--view", "canvas"]);
+    let (code, stdout, _) = run(&canvas);
+    assert_eq!(code, 0, "{stdout}");
+    assert!(stdout.starts_with("plan of the canvas view: 1 pass\n  1. canvas\n"), "{stdout}");
+    // With `--out`: rendered, each pass timed beside it, the plan in the timings' JSON.
+    let (exr, timings) = (out(&dir, "a.exr"), out(&dir, "t.json"));
+    let mut rendered = args.clone();
+    rendered.extend(["--out", exr.to_str().unwrap(), "--timings", timings.to_str().unwrap()]);
+    let (code, stdout, stderr) = run(&rendered);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(exr.is_file());
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
+    let planned: Vec<&str> =
+        t["plan"]["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    let timed: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    let planned_timed: Vec<&str> = planned.iter().copied().filter(|n| *n != "clear").collect();
+    assert_eq!(planned_timed, timed, "the plan's timed passes are the frame's");
+    assert!(stdout.lines().any(|l| l.contains(" ms ") && l.contains("1. gbuffer")), "{stdout}");
+    assert!(stdout.lines().any(|l| l.contains("untimed") && l.contains("2. clear")), "{stdout}");
+    // `--timings` without `--out` has no frame to time; the reference has no plan.
+    let mut untimed = args.clone();
+    untimed.extend(["--timings", timings.to_str().unwrap()]);
+    assert_refused(run(&untimed), 1, &["--timings", "--out"]);
+    let reference = ["reference", "--plan", "--env", &hdri("studio.exr"), "--size", "8x8"];
+    assert_refused(run(&reference), 1, &["--plan"]);
+    // Without `--plan`, `--out` is required.
+    let (code, _, stderr) = run(&["render", "--env", &hdri("studio.exr")]);
+    assert!(code != 0 && stderr.contains("--out"), "{code} {stderr}");
+}

@@ -11,6 +11,13 @@ use brdf_shop::render::View;
 use super::scene::{self, SceneArgs};
 
 pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
+    if args.plan {
+        return Err(brdf_shop::Error::input(
+            "--plan",
+            "is the GPU renderer's (brdf-shop render --plan); the reference has no passes",
+        )
+        .into());
+    }
     let scene = scene::load(args, |_| 1024, reference::check_limits)?;
     brdf_shop::interrupt::install();
     let s = &scene.settings;
@@ -44,7 +51,15 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     };
     let mut image = image;
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    scene::write_outputs(args, &mut image, "cpu (reference)", &scene, &[("reference".to_string(), ms)], ms, None)?;
+    scene::write_outputs(
+        args,
+        &mut image,
+        "cpu (reference)",
+        &scene,
+        &[("reference".to_string(), ms)],
+        ms,
+        Vec::new(),
+    )?;
     scene::report_env(&scene);
     eprintln!(
         "reference {}x{} at {} spp in {:.1} s; wrote {}",
@@ -52,7 +67,7 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         image.height,
         s.spp,
         ms / 1e3,
-        brdf_shop::fsio::show(&args.out)
+        brdf_shop::fsio::show(args.out())
     );
     Ok(())
 }

@@ -1,6 +1,8 @@
-//! `brdf-shop render`: one headless GPU frame (README, Commands) written as EXR or PNG, with `--timings`.
+//! `brdf-shop render`: one headless GPU frame (README, Commands) written as EXR or PNG, with
+//! `--timings`; `--plan` prints the frame's plan (without `--out`, instead of rendering).
 
-use brdf_shop::render::{Estimator, Renderer, View};
+use brdf_shop::render::plan::Plan;
+use brdf_shop::render::{Estimator, Progress, Renderer, View};
 use brdf_shop::vk::Context;
 
 use super::scene::{self, SceneArgs};
@@ -14,6 +16,12 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     if let Some(mesh) = &scene.mesh {
         renderer.set_mesh(mesh)?;
     }
+    // The plan of the frame `render` records: a frame of its own, which rasterises.
+    let plan = renderer.plan(&scene.material, &scene.settings, Progress::Fresh, false);
+    if args.out.is_none() {
+        print!("{}", plan.describe());
+        return Ok(());
+    }
     if !renderer.linear_filtering() {
         eprintln!(
             "warning: this device cannot filter RGBA32F linearly; the environment is read with nearest filtering"
@@ -25,8 +33,12 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let key_lights = (scene.settings.estimator == Estimator::Key && scene.settings.view == View::Mesh)
         .then(|| renderer.key_lights())
         .flatten();
-    let json = key_lights.map(|k| k.to_json());
-    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, frame.frame_ms, json)?;
+    let mut extra = vec![("plan", plan.to_json())];
+    extra.extend(key_lights.map(|k| ("key_lights", k.to_json())));
+    scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, frame.frame_ms, extra)?;
+    if args.plan {
+        print!("{}", timed_plan(&plan, &passes));
+    }
     scene::report_env(&scene);
     if let Some(k) = key_lights {
         eprintln!("key estimator: {}", k.describe());
@@ -40,7 +52,28 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
         frame.timings.len(),
         frame.passes_ms(),
         frame.untimed_ms(),
-        brdf_shop::fsio::show(&args.out)
+        brdf_shop::fsio::show(args.out())
     );
     Ok(())
+}
+
+/// The plan in words with each pass's GPU time at the start of its line (`untimed` for a transfer
+/// clear, which no timestamp pair brackets).
+fn timed_plan(plan: &Plan, passes: &[(String, f64)]) -> String {
+    let words = plan.describe();
+    let mut out = String::new();
+    let mut steps = plan.steps.iter();
+    for line in words.lines() {
+        let numbered = line.trim_start().split_once(". ").filter(|(n, _)| n.parse::<usize>().is_ok());
+        match (numbered, steps.clone().next()) {
+            (Some(_), Some(step)) => {
+                steps.next();
+                let ms = passes.iter().find(|(n, _)| *n == step.name()).map(|p| p.1);
+                let time = ms.map_or("   untimed".to_string(), |ms| format!("{ms:>7.3} ms"));
+                out.push_str(&format!("{time} {line}\n"));
+            }
+            _ => out.push_str(&format!("           {line}\n")),
+        }
+    }
+    out
 }

@@ -85,11 +85,24 @@ pub struct SceneArgs {
     #[arg(long, value_name = "LEVEL", default_value_t = 0.0, allow_hyphen_values = true)]
     pub backdrop_blur: f64,
     /// Output image: .exr (linear) or .png.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Write the GPU time of every pass that ran (JSON).
+    #[arg(long, required_unless_present = "plan")]
+    pub out: Option<PathBuf>,
+    /// Write the GPU time of every pass that ran, and the frame's plan (JSON).
     #[arg(long)]
     pub timings: Option<PathBuf>,
+    /// Print the frame's plan (its passes in order, each one's variant and why it runs; what it leaves
+    /// out and why) without rendering; with `--out`, render as well and print each pass's GPU time
+    /// beside it (`render` only).
+    #[arg(long)]
+    pub plan: bool,
+}
+
+impl SceneArgs {
+    /// The output image (clap makes `--out` required unless `--plan` is given, and the commands
+    /// that draw nothing never ask for it).
+    pub fn out(&self) -> &Path {
+        self.out.as_deref().unwrap_or(Path::new(""))
+    }
 }
 
 /// Everything a render needs, loaded and checked.
@@ -151,8 +164,14 @@ fn canvas_light(args: &SceneArgs, env: Option<&Environment>, camera: &Camera) ->
 /// Checks the output paths before any work: `--out` (an image format, a writable folder) and
 /// `--timings` (a writable folder, not the same file as `--out` however spelled).
 pub fn check_outputs(args: &SceneArgs) -> anyhow::Result<()> {
-    brdf_shop::imageio::check_output_path(&args.out)?;
-    let mut outputs = vec![("--out", args.out.as_path())];
+    if args.out.is_none() {
+        if args.timings.is_some() {
+            return Err(Error::input("--timings", "needs --out: a plan without --out renders no frame to time").into());
+        }
+        return Ok(());
+    }
+    brdf_shop::imageio::check_output_path(args.out())?;
+    let mut outputs = vec![("--out", args.out())];
     outputs.extend(args.timings.as_deref().map(|t| ("--timings", t)));
     brdf_shop::fsio::check_outputs(&outputs)?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
@@ -281,7 +300,7 @@ pub fn write_outputs(
     scene: &Scene,
     passes: &[(String, f64)],
     frame_ms: f64,
-    key_lights: Option<serde_json::Value>,
+    extra: Vec<(&str, serde_json::Value)>,
 ) -> anyhow::Result<()> {
     // The backdrop (alpha 0) at its own brightness: the image holds the map's radiance times it, and
     // a PNG shows it as it is, the object at the exposure.
@@ -292,13 +311,13 @@ pub fn write_outputs(
     let clamped = brdf_shop::imageio::clamp_to_finite(&mut image.pixels);
     let backdrop_exposure = if backdrop.is_some() { 1.0 } else { args.exposure };
     let (w, h) = (image.width, image.height);
-    let bytes = brdf_shop::imageio::encode_view(&args.out, w, h, &image.pixels, args.exposure, backdrop_exposure)?;
+    let bytes = brdf_shop::imageio::encode_view(args.out(), w, h, &image.pixels, args.exposure, backdrop_exposure)?;
     let timings = args
         .timings
         .as_ref()
-        .map(|t| timings_json(device, scene, passes, frame_ms, key_lights.clone()).map(|j| (t, j)))
+        .map(|t| timings_json(device, scene, passes, frame_ms, &extra).map(|j| (t, j)))
         .transpose()?;
-    let mut outputs: Vec<(&Path, &[u8])> = vec![(&args.out, &bytes)];
+    let mut outputs: Vec<(&Path, &[u8])> = vec![(args.out(), &bytes)];
     if let Some((t, j)) = &timings {
         outputs.push((t.as_path(), j.as_bytes()));
     }
@@ -314,13 +333,13 @@ pub fn write_outputs(
 
 /// The `--timings` JSON: device, estimator, size, samples, per pass its name and GPU ms, their sum
 /// (`total_ms`), the whole frame (`frame_ms`, first command to last) and the part of it no pass
-/// timed (`untimed_ms`).
+/// timed (`untimed_ms`), then the `extra` fields (the frame's plan, the key lights).
 fn timings_json(
     device: &str,
     scene: &Scene,
     passes: &[(String, f64)],
     frame_ms: f64,
-    key_lights: Option<serde_json::Value>,
+    extra: &[(&str, serde_json::Value)],
 ) -> anyhow::Result<String> {
     let s = &scene.settings;
     let total = passes.iter().map(|p| p.1).sum::<f64>() + 0.0;
@@ -335,8 +354,8 @@ fn timings_json(
         "frame_ms": frame_ms,
         "untimed_ms": brdf_shop::vk::query::untimed_ms(frame_ms, total),
     });
-    if let Some(k) = key_lights {
-        json["key_lights"] = k;
+    for (name, value) in extra {
+        json[*name] = value.clone();
     }
     Ok(serde_json::to_string_pretty(&json).context("encoding timings")? + "\n")
 }

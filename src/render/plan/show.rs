@@ -141,7 +141,7 @@ fn lobe_words(l: &LobeStep) -> String {
         LobeLights::Tiles(t) => parts.push(format!("lights as tiles ({} points)", t.rows.len())),
     }
     if v.reach {
-        parts.push(format!("reach test over {} lights", v.light_slots));
+        parts.push(format!("reach test over {} light(s)", v.light_slots));
     }
     parts.join(", ")
 }
@@ -154,7 +154,8 @@ impl Plan {
             View::Mesh => "mesh",
             View::Canvas => "canvas",
         };
-        writeln!(out, "plan of the {view} view: {} passes", self.steps.len()).unwrap();
+        let n = self.steps.len();
+        writeln!(out, "plan of the {view} view: {n} pass{}", if n == 1 { "" } else { "es" }).unwrap();
         for (n, s) in self.steps.iter().enumerate() {
             let variant = s.variant();
             let variant = if variant.is_empty() { String::new() } else { format!(" [{variant}]") };
