@@ -143,10 +143,10 @@ fn idle_frames_refine_the_mesh_view() {
             assert!(has("mis") && has("accumulate") && !has("canvas"), "{f}");
             assert_eq!(f["spp"], 16, "{f}");
             // The timestamps time the passes they bracket: 16 `mis` samples a pixel over the
-            // sphere measure 100x the compose pass (one read and write a window pixel; 98-295 ms
-            // against 0.9-6 ms, release build). A first timestamp written only when the next pass
-            // flushes the rasteriser, after the pass has run, reads these `mis` passes as 0.03-0.66 ms
-            // against a compose of 0.9-1.8 ms: this catches a timestamp that does not bracket its pass.
+            // sphere cost about two orders of magnitude more than the compose pass (one read and
+            // write a window pixel). A first timestamp written only when the next pass flushes the
+            // rasteriser, after the pass has run, reads these `mis` passes below the compose pass:
+            // this catches a timestamp that does not bracket its pass.
             assert!(ms("mis") > ms("compose"), "the mis pass timed below the compose pass: {f}");
         } else if f["kind"] == "waiting" {
             // The mesh view waits for its lobe pipelines, built off the UI thread: nothing of it.
@@ -261,7 +261,8 @@ fn no_arguments_without_a_display_runs_the_demo() {
 #[test]
 fn state_handles_inputs_like_the_window() {
     use brdf_shop::brush::strokes::{default_strokes, BrushKind};
-    use brdf_shop::editor::state::{stroke_inputs, Input, Layout, State};
+    use brdf_shop::editor::state::{stroke_inputs, Input, State};
+    use brdf_shop::layout::Layout;
     let strokes = default_strokes().unwrap();
     let settings = strokes.settings("test").unwrap();
     let layout = Layout::new(1280, 720);
@@ -438,7 +439,8 @@ fn minimise_without_a_window_manager_is_one_line_and_the_session_goes_on() {
 /// after every resize; `F` brings the zoom back to that framing.
 #[test]
 fn the_layout_fills_the_window_and_the_camera_frames_the_mesh() {
-    use brdf_shop::editor::state::{Input, Layout, State, FRAME_MARGIN};
+    use brdf_shop::editor::state::{Input, State, FRAME_MARGIN};
+    use brdf_shop::layout::Layout;
     use brdf_shop::scene::camera::fit_distance;
     for (w, h) in [(1280, 720), (720, 1280), (1920, 800), (640, 480), (300, 2000), (2000, 300)] {
         let l = Layout::new(w, h);
@@ -467,7 +469,8 @@ fn the_layout_fills_the_window_and_the_camera_frames_the_mesh() {
 #[test]
 fn shift_drag_turns_the_environment_and_keys_set_the_backdrop() {
     use brdf_shop::editor::backdrop::{Backdrop, BLUR_RANGE};
-    use brdf_shop::editor::state::{Input, Layout, State, TURN_DEG_PER_PIXEL};
+    use brdf_shop::editor::state::{Input, State, TURN_DEG_PER_PIXEL};
+    use brdf_shop::layout::Layout;
     let settings = brdf_shop::brush::strokes::default_strokes().unwrap().settings("test").unwrap();
     let mut s = State::new(Material::scratch(), settings, Layout::new(1280, 720));
     let (mx, my) = (s.layout.mesh_x as f64 + 100.0, 300.0);

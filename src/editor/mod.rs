@@ -10,8 +10,9 @@
 //! (`--replay` feeds the same inputs from a strokes file); this module owns the session (window,
 //! scene, history, scripted steps, dropped files); `frame` decides per frame what must be re-rendered
 //! (generation counters of the material, camera, light and environment) and runs the tool panel;
-//! `view` renders, composes and presents on the GPU with frames in flight; `recovery` keeps unsaved
-//! work; `stats` records frame times.
+//! `view` renders, composes and presents on the GPU with frames in flight; `start` checks the options,
+//! loads the scene, runs the event loop and writes the outputs at the end; `recovery` keeps unsaved
+//! work; `stats` records frame times. Where the panel and the views sit is [`crate::layout`].
 
 pub mod backdrop;
 pub mod export;
@@ -24,6 +25,7 @@ pub mod panel;
 pub mod preview;
 pub mod recovery;
 pub mod report;
+mod start;
 pub mod state;
 pub mod stats;
 pub mod view;
@@ -33,19 +35,21 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::DVec3;
-use winit::event_loop::{ActiveEventLoop, EventLoop, EventLoopProxy};
+use winit::event_loop::{ActiveEventLoop, EventLoopProxy};
 use winit::keyboard::ModifiersState;
 use winit::window::Window;
 
 use crate::brdf::Material;
 use crate::brush::{Settings, Strokes};
 use crate::error::{Error, Result};
+use crate::layout::Layout;
 use crate::scene::{Environment, Mesh};
 
 use frame::{CanvasKey, MeshKey};
 use recovery::keep_recovery;
 pub use recovery::{recovery_path, save_recovery};
-use state::{Input, Layout, State};
+pub use start::run;
+use state::{Input, State};
 use stats::{FrameKind, FrameStat};
 use view::Gpu;
 
@@ -465,153 +469,4 @@ impl App {
         }
         Ok(())
     }
-
-    fn finish(&mut self) -> Result<()> {
-        if let Some(g) = self.gpu.as_mut() {
-            g.renderer.finish_frames()?;
-            let finished = g.renderer.take_finished();
-            self.file_finished(finished);
-        }
-        let Some(state) = self.state.as_ref() else { return Ok(()) };
-        if let Some(p) = &self.opts.out {
-            state.material().save(p)?;
-        }
-        if let (Some(p), Some(frame)) = (&self.opts.screenshot, &self.captured) {
-            let l = state.layout;
-            crate::imageio::write_rgba8_png(p, l.width, l.height, frame)?;
-        }
-        if let Some(p) = &self.opts.frame_stats {
-            let device = self.gpu.as_ref().map_or(String::new(), |g| g.renderer.device_name().to_string());
-            let size = (state.layout.width, state.layout.height);
-            let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
-            let views = stats::views_json(state, (self.env_summary.exposure, self.env_backdrop), self.spp, refined);
-            let json = stats::frame_stats_json(&device, size, &self.frame_stats, self.skipped_minimised, views);
-            crate::fsio::write_atomic(p, json.as_bytes())?;
-        }
-        Ok(())
-    }
-}
-
-/// Runs the editor until the window closes (or, with `quit`, until the replay is done).
-pub fn run(opts: Options) -> Result<()> {
-    check_size(opts.size)?;
-    if let Some(ms) = opts.frame_budget_ms {
-        check_frame_budget(ms)?;
-    }
-    for &(w, h) in &opts.resize {
-        check_size((w, h)).map_err(|_| {
-            Error::input("--resize", format!("{w}x{h}: each side must be within 1 and {MAX_WINDOW_SIDE} pixels"))
-        })?;
-    }
-    // Each output a different file (however spelled), all refused before the window opens. The
-    // exports take part in the same-file check; whether an export's folder takes a file is found
-    // when it is written (a status line: the session goes on).
-    let outputs: Vec<(&str, &Path)> =
-        [("--out", &opts.out), ("--screenshot", &opts.screenshot), ("--frame-stats", &opts.frame_stats)]
-            .into_iter()
-            .filter_map(|(flag, p)| p.as_deref().map(|p| (flag, p)))
-            .collect();
-    crate::fsio::check_outputs(&outputs)?;
-    let exports: Vec<(String, &Path)> =
-        opts.export.iter().map(|(f, p)| (format!("--export {}", f.name()), p.as_path())).collect();
-    let all: Vec<(&str, &Path)> =
-        outputs.iter().copied().chain(exports.iter().map(|(flag, p)| (flag.as_str(), *p))).collect();
-    crate::fsio::check_distinct(&all)?;
-    let env = match &opts.env {
-        Some(p) => Environment::load(p)?,
-        None => crate::measure::embedded_environment()?,
-    };
-    let mesh = Mesh::resolve(opts.mesh.as_deref().unwrap_or("torus"))?;
-    let replay = opts.replay.as_deref().map(Strokes::load).transpose()?;
-    let start = match (&opts.material, &replay) {
-        (Some(p), _) => Material::load(p)?,
-        (None, Some(_)) => Material::scratch(),
-        (None, None) => crate::brush::strokes::default_material()?,
-    };
-    let session = match backdrop::session_path().map(|p| (backdrop::Session::load(&p), p)) {
-        Some((Ok(s), _)) => s,
-        Some((Err(why), p)) => {
-            eprintln!("brdf-shop: warning: the session file {} is ignored: {why}", crate::fsio::show(&p));
-            backdrop::Session::default()
-        }
-        None => backdrop::Session::default(),
-    };
-    let event_loop = EventLoop::new().map_err(|e| {
-        Error::NoDevice(format!("cannot reach a display ({e}); set DISPLAY or WAYLAND_DISPLAY, or run under xvfb-run"))
-    })?;
-    let budget = opts.frame_budget_ms.unwrap_or(preview::DEFAULT_BUDGET_MS);
-    let export_dialog = export::Dialog::new(opts.out.as_deref().or(opts.material.as_deref()));
-    let mut app = App {
-        proxy: event_loop.create_proxy(),
-        opts,
-        env_summary: EnvSummary::of(&env),
-        env_backdrop: backdrop::auto_brightness(&env),
-        session,
-        session_warned: false,
-        env_turn_pending: false,
-        env,
-        mesh,
-        scene_generation: 0,
-        start,
-        replay,
-        pending: VecDeque::new(),
-        window_script: VecDeque::new(),
-        window_wait: None,
-        egui_repaint: None,
-        skipped_minimised: 0,
-        restore_redraw: false,
-        gpu: None,
-        state: None,
-        modifiers: ModifiersState::empty(),
-        shown: false,
-        captured: None,
-        error: None,
-        done: false,
-        mesh_key: None,
-        mesh_waiting: false,
-        canvas_key: None,
-        curves: None,
-        frame_ms: Vec::new(),
-        in_flight: Vec::new(),
-        preview: preview::Preview::new(budget),
-        mesh_previewed: false,
-        canvas_previewed: false,
-        frame_stats: Vec::new(),
-        recovery_warned: false,
-        egui_ctx: egui::Context::default(),
-        egui_state: None,
-        spp: 8,
-        report: None,
-        timings: Vec::new(),
-        panel_dragging: false,
-        dialog: None,
-        export_dialog,
-    };
-    let recovery = recovery_path().map(|p| crate::fsio::show(&p)).unwrap_or_default();
-    match app.recovered_material() {
-        Ok(Some(_)) => eprintln!(
-            "brdf-shop: unsaved work from the last session is in {recovery}; press R in the window to restore it"
-        ),
-        Ok(None) => {}
-        Err(why) => eprintln!("brdf-shop: warning: the recovery file {recovery} is ignored: {why}"),
-    }
-    event_loop.run_app(&mut app).map_err(|e| Error::NoDevice(format!("the window's event loop failed: {e}")))?;
-    if let Some(e) = app.error.take() {
-        return Err(e);
-    }
-    app.finish()?;
-    if app.opts.quit && !app.frame_ms.is_empty() {
-        let (median, min, max) = crate::measure::stats(&app.frame_ms);
-        let l = app.state.as_ref().map(|s| s.layout);
-        let refined = app.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
-        eprintln!(
-            "{} frames at {}x{}: median {median:.1} ms (min {min:.1}, max {max:.1}); mesh view at {} spp",
-            app.frame_ms.len(),
-            l.map_or(0, |l| l.width),
-            l.map_or(0, |l| l.height),
-            if refined == 0 { format!("key {}", app.spp) } else { format!("mis {refined}") }
-        );
-    }
-    drop(app.gpu.take());
-    Ok(())
 }

@@ -1,6 +1,6 @@
 //! The editor's state and what each input does to it, without any window or GPU: the material with
 //! its undo history, the brush and the stroke being painted, the canvas light, the orbit camera and
-//! the layout of the window. The window code turns winit events into [`Input`]s; `--replay`
+//! the window's [`Layout`]. The window code turns winit events into [`Input`]s; `--replay`
 //! synthesises the same [`Input`]s from a strokes file, so both go through [`State::handle`].
 
 use std::path::PathBuf;
@@ -13,6 +13,7 @@ use crate::brush::history::History;
 use crate::brush::strokes::{apply, BrushKind, Stroke};
 use crate::brush::Settings;
 use crate::export::Format;
+use crate::layout::Layout;
 use crate::scene::Camera;
 
 use super::backdrop::{Backdrop, BLUR_RANGE};
@@ -61,58 +62,6 @@ pub enum Input {
     BackdropBlur(bool),
     BackdropBrightness(bool),
     SetBackdrop(Backdrop),
-}
-
-/// The tool panel's width (left edge of the window), when the window is wide enough for it.
-pub const PANEL_WIDTH: u32 = 280;
-
-/// Where the views sit in the window (pixels).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Layout {
-    pub width: u32,
-    pub height: u32,
-    /// The mesh view: `(mesh_x, 0, mesh_w, height)`, right of the tool panel.
-    pub mesh_x: u32,
-    pub mesh_w: u32,
-    /// The canvas: a square of side `canvas` at `(canvas_x, 0)`.
-    pub canvas_x: u32,
-    pub canvas: u32,
-    /// The BRDF graph: `(canvas_x, graph_y, width − canvas_x, height − graph_y)`.
-    pub graph_y: u32,
-}
-
-impl Layout {
-    pub fn new(width: u32, height: u32) -> Layout {
-        // The tool panel is always drawn at the left edge: the views start right of it (in a
-        // window narrower than two panels, half the width is left to them).
-        let mesh_x = PANEL_WIDTH.min(width / 2);
-        // The right column is as wide as the canvas (at most half of what the panel leaves, at
-        // most 3/5 of the height: the graphs below it keep the rest); the mesh view takes all the
-        // width between the panel and that column, so no strip of the window is left unfilled.
-        let canvas = ((width - mesh_x) / 2).min(height * 3 / 5).max(1);
-        let mesh_w = (width - mesh_x).saturating_sub(canvas).max(1);
-        let canvas_x = mesh_x + mesh_w;
-        Layout { width, height, mesh_x, mesh_w, canvas_x, canvas, graph_y: canvas.min(height) }
-    }
-
-    /// Canvas coordinates `(cu, cv)` of a window point.
-    pub fn canvas_coords(&self, x: f64, y: f64) -> (f64, f64) {
-        ((x - self.canvas_x as f64) / self.canvas as f64, y / self.canvas as f64)
-    }
-
-    /// The window point of canvas coordinates.
-    pub fn canvas_point(&self, cu: f64, cv: f64) -> (f64, f64) {
-        (self.canvas_x as f64 + cu * self.canvas as f64, cv * self.canvas as f64)
-    }
-
-    pub fn in_canvas(&self, x: f64, y: f64) -> bool {
-        let (cu, cv) = self.canvas_coords(x, y);
-        (0.0..1.0).contains(&cu) && (0.0..1.0).contains(&cv)
-    }
-
-    pub fn in_mesh(&self, x: f64, y: f64) -> bool {
-        x >= self.mesh_x as f64 && x < (self.mesh_x + self.mesh_w) as f64 && y >= 0.0 && y < self.height as f64
-    }
 }
 
 /// What the window must do after an input.
@@ -254,78 +203,11 @@ impl State {
         Camera { eye, target: DVec3::ZERO, up: DVec3::Y, fov_deg: self.fov_deg }
     }
 
+    /// What `input` does to the state, and what the window must do after it.
     pub fn handle(&mut self, input: Input) -> Effect {
         let mut fx = Effect::default();
         match input {
-            Input::CursorMoved(x, y) => {
-                let prev = self.cursor;
-                self.cursor = (x, y);
-                match &mut self.drag {
-                    Drag::Stroke(st) => {
-                        let (cu, cv) = self.layout.canvas_coords(x, y);
-                        st.points.push([cu, cv]);
-                    }
-                    Drag::Orbit { last } => {
-                        let (dx, dy) = (x - last.0, y - last.1);
-                        *last = (x, y);
-                        self.yaw -= dx * 0.01;
-                        self.pitch = (self.pitch + dy * 0.01).clamp(-1.5, 1.5);
-                        fx.redraw = true;
-                    }
-                    Drag::TurnEnv { last } => {
-                        let dx = x - *last;
-                        *last = x;
-                        return self.turn_env(dx * TURN_DEG_PER_PIXEL);
-                    }
-                    Drag::Light => {
-                        fx.redraw |= self.set_light_at(x, y);
-                    }
-                    Drag::None => {}
-                }
-                let _ = prev;
-            }
-            Input::Button { pressed: true, right: false } => {
-                let (x, y) = self.cursor;
-                if self.layout.in_canvas(x, y) {
-                    let (cu, cv) = self.layout.canvas_coords(x, y);
-                    self.drag = Drag::Stroke(Stroke { brush: self.brush, points: vec![[cu, cv]], lobe: self.lobe });
-                } else if self.layout.in_mesh(x, y) && self.shift {
-                    self.drag = Drag::TurnEnv { last: x };
-                } else if self.layout.in_mesh(x, y) {
-                    self.drag = Drag::Orbit { last: (x, y) };
-                }
-            }
-            Input::Button { pressed: true, right: true } => {
-                let (x, y) = self.cursor;
-                if self.layout.in_canvas(x, y) {
-                    self.drag = Drag::Light;
-                    fx.redraw |= self.set_light_at(x, y);
-                }
-            }
-            Input::Button { pressed: false, .. } => {
-                if let Drag::Stroke(st) = std::mem::replace(&mut self.drag, Drag::None) {
-                    match apply(self.material(), &self.settings, &st) {
-                        Ok(m) => {
-                            self.history.push(m);
-                            self.status = format!("{} applied", st.brush.name());
-                            fx.material_changed = true;
-                            fx.redraw = true;
-                        }
-                        Err(e) => {
-                            self.status = format!("{}: {e}", st.brush.name());
-                            fx.message = Some(self.status.clone());
-                            fx.redraw = true;
-                        }
-                    }
-                }
-            }
-            Input::Scroll(d) => {
-                if self.layout.in_mesh(self.cursor.0, self.cursor.1) {
-                    self.zoom *= 1.0 - 0.1 * d;
-                    self.refit();
-                    fx.redraw = true;
-                }
-            }
+            Input::CursorMoved(..) | Input::Button { .. } | Input::Scroll(_) => return self.handle_pointer(input),
             Input::Brush(b) => {
                 self.brush = b;
                 self.status = format!("brush: {}", b.name());
@@ -383,6 +265,95 @@ impl State {
                     self.history.push(m);
                     self.status = "restored the last session's material".into();
                     fx.material_changed = true;
+                    fx.redraw = true;
+                }
+            }
+        }
+        fx
+    }
+
+    /// The pointer's inputs: a move carries on the drag in progress, a press over a view starts one
+    /// (on the canvas a stroke with the left button, the light with the right; on the mesh view an
+    /// orbit, or with Shift the environment's turn), a release ends it, the wheel zooms the mesh view.
+    fn handle_pointer(&mut self, input: Input) -> Effect {
+        let mut fx = Effect::default();
+        match input {
+            Input::CursorMoved(x, y) => return self.cursor_moved(x, y),
+            Input::Button { pressed: true, right: false } => {
+                let (x, y) = self.cursor;
+                if self.layout.in_canvas(x, y) {
+                    let (cu, cv) = self.layout.canvas_coords(x, y);
+                    self.drag = Drag::Stroke(Stroke { brush: self.brush, points: vec![[cu, cv]], lobe: self.lobe });
+                } else if self.layout.in_mesh(x, y) && self.shift {
+                    self.drag = Drag::TurnEnv { last: x };
+                } else if self.layout.in_mesh(x, y) {
+                    self.drag = Drag::Orbit { last: (x, y) };
+                }
+            }
+            Input::Button { pressed: true, right: true } => {
+                let (x, y) = self.cursor;
+                if self.layout.in_canvas(x, y) {
+                    self.drag = Drag::Light;
+                    fx.redraw |= self.set_light_at(x, y);
+                }
+            }
+            Input::Button { pressed: false, .. } => return self.release(),
+            Input::Scroll(d) if self.layout.in_mesh(self.cursor.0, self.cursor.1) => {
+                self.zoom *= 1.0 - 0.1 * d;
+                self.refit();
+                fx.redraw = true;
+            }
+            // A scroll outside the mesh view does nothing.
+            _ => {}
+        }
+        fx
+    }
+
+    /// The cursor moved to `(x, y)`: the stroke takes the point, the orbit turns the camera, a
+    /// Shift-drag turns the environment, a dragged light follows.
+    fn cursor_moved(&mut self, x: f64, y: f64) -> Effect {
+        let mut fx = Effect::default();
+        self.cursor = (x, y);
+        match &mut self.drag {
+            Drag::Stroke(st) => {
+                let (cu, cv) = self.layout.canvas_coords(x, y);
+                st.points.push([cu, cv]);
+            }
+            Drag::Orbit { last } => {
+                let (dx, dy) = (x - last.0, y - last.1);
+                *last = (x, y);
+                self.yaw -= dx * 0.01;
+                self.pitch = (self.pitch + dy * 0.01).clamp(-1.5, 1.5);
+                fx.redraw = true;
+            }
+            Drag::TurnEnv { last } => {
+                let dx = x - *last;
+                *last = x;
+                return self.turn_env(dx * TURN_DEG_PER_PIXEL);
+            }
+            Drag::Light => {
+                fx.redraw |= self.set_light_at(x, y);
+            }
+            Drag::None => {}
+        }
+        fx
+    }
+
+    /// A button was released: the drag ends, and a stroke is applied to the material (a history
+    /// step), or why it cannot be becomes the status line.
+    fn release(&mut self) -> Effect {
+        let mut fx = Effect::default();
+        if let Drag::Stroke(st) = std::mem::replace(&mut self.drag, Drag::None) {
+            match apply(self.material(), &self.settings, &st) {
+                Ok(m) => {
+                    self.history.push(m);
+                    self.status = format!("{} applied", st.brush.name());
+                    fx.material_changed = true;
+                    fx.redraw = true;
+                }
+                Err(e) => {
+                    self.status = format!("{}: {e}", st.brush.name());
+                    fx.message = Some(self.status.clone());
                     fx.redraw = true;
                 }
             }

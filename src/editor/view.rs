@@ -41,6 +41,21 @@ pub struct Plan<'a> {
     pub capture: bool,
 }
 
+/// The acquired swapchain image a frame draws into.
+struct Target {
+    image: vk::Image,
+    view: vk::ImageView,
+    extent: vk::Extent2D,
+}
+
+/// The one colour layer of the window's images (mip 0, layer 0), for copies.
+const COLOR_LAYERS: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    mip_level: 0,
+    base_array_layer: 0,
+    layer_count: 1,
+};
+
 /// What became of a frame.
 pub enum Shown {
     /// Presented; the pixels when captured (`RGBA8`, the window's size), and what became of the mesh
@@ -147,8 +162,8 @@ impl Gpu {
         Ok(self.swapchain.as_ref().map(|s| (s.extent.width, s.extent.height)))
     }
 
-    /// The window now has `size`: a swapchain of another size is dropped (not every platform reports
-    /// it out of date), so the next frame makes one of the window's size.
+    /// The window was resized to `size`: a swapchain of another size is dropped (not every platform
+    /// reports it out of date), so the next frame makes one of the window's size.
     pub fn resized(&mut self, size: (u32, u32)) -> Result<()> {
         if self.swapchain.as_ref().is_some_and(|s| (s.extent.width, s.extent.height) != size) {
             self.drop_swapchain()?;
@@ -242,9 +257,30 @@ impl Gpu {
         Ok(Shown::Presented { pixels, mesh })
     }
 
-    /// Records the frame's GPU work after the swapchain image `index` was acquired.
-    /// Returns what became of the mesh view (`Done` when it was not asked for).
+    /// Records the frame's GPU work after the swapchain image `index` was acquired: the views that
+    /// changed, the window image composed from them, the panel's textures, the copy into the
+    /// swapchain image, the panel on top, and the image's way to presentation (through the capture
+    /// buffer when asked). Returns what became of the mesh view (`Done` when it was not asked for).
     fn record(&mut self, plan: &Plan<'_>, index: u32) -> Result<Recorded> {
+        let mesh = self.record_views(plan)?;
+        self.compose(plan, mesh)?;
+        let ctx = &self.renderer.ctx;
+        let ui = self.ui.as_mut().expect("made with the swapchain");
+        ui.set_textures(ctx.device.queue, ctx.commands.pool, &plan.ui.0.set)
+            .map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
+        self.make_capture(plan)?;
+        let sc = self.swapchain.as_ref().expect("made by frame");
+        let target = Target { image: sc.images[index as usize], view: sc.views[index as usize], extent: sc.extent };
+        // The window's copy and the tool panel are timed as passes too: on a CPU device they are
+        // part of what the frame costs.
+        self.record_window_copy(&target)?;
+        self.record_panel(plan, &target)?;
+        self.record_to_present(plan, &target);
+        Ok(mesh)
+    }
+
+    /// Records the mesh view and the canvas as the plan asks. Returns what became of the mesh view.
+    fn record_views(&mut self, plan: &Plan<'_>) -> Result<Recorded> {
         let mut mesh = Recorded::Done;
         if let Some((settings, progress)) = &plan.mesh {
             mesh = self.renderer.record(plan.material, settings, *progress)?;
@@ -253,6 +289,13 @@ impl Gpu {
             // A canvas has no lobe pipelines to wait for.
             let _ = self.renderer.record(plan.material, settings, Progress::Fresh)?;
         }
+        Ok(mesh)
+    }
+
+    /// Composes the window image, rewriting only what changed since the last composition: a view
+    /// that was rendered (not a mesh view that waits) or whose brightness or marker changed, and
+    /// everything after a new placement of the views.
+    fn compose(&mut self, plan: &Plan<'_>, mesh: Recorded) -> Result<()> {
         let window_image = self.window_image.as_ref().expect("made by frame");
         let (now, was) = (&plan.placement, self.composed.as_ref());
         let parts = Parts {
@@ -264,10 +307,14 @@ impl Gpu {
         };
         self.renderer.record_compose(window_image, now, parts)?;
         self.composed = Some(*now);
+        Ok(())
+    }
+
+    /// Makes the host-visible buffer a captured frame is copied into, when the plan asks for a
+    /// capture and there is none of the swapchain's size; a swapchain whose images cannot be read
+    /// back is an error.
+    fn make_capture(&mut self, plan: &Plan<'_>) -> Result<()> {
         let ctx = &self.renderer.ctx;
-        let ui = self.ui.as_mut().expect("made with the swapchain");
-        ui.set_textures(ctx.device.queue, ctx.commands.pool, &plan.ui.0.set)
-            .map_err(|e| Error::NoDevice(format!("the tool panel's textures: {e}")))?;
         let sc = self.swapchain.as_ref().expect("made by frame");
         let (w, h) = (sc.extent.width, sc.extent.height);
         if plan.capture && self.capture.as_ref().is_none_or(|b| b.size != (w * h * 4) as u64) {
@@ -281,26 +328,21 @@ impl Gpu {
             self.capture =
                 Some(Buffer::new(ctx, (w * h * 4) as u64, usage, MemoryLocation::GpuToCpu, "window.capture")?);
         }
-        let (cmd, _) = self.renderer.frame_commands();
-        let image = sc.images[index as usize];
-        let range = barrier::color();
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
+        Ok(())
+    }
+
+    /// The timed "window copy" pass: blits the composed window image into the acquired swapchain
+    /// image, which it leaves as a colour attachment for the panel.
+    fn record_window_copy(&mut self, target: &Target) -> Result<()> {
+        let window_raw = self.window_image.as_ref().expect("made by frame").raw;
+        let (w, h) = (target.extent.width, target.extent.height);
         let corner = [vk::Offset3D::default(), vk::Offset3D { x: w as i32, y: h as i32, z: 1 }];
         let blit = vk::ImageBlit::default()
-            .src_subresource(layers)
+            .src_subresource(COLOR_LAYERS)
             .src_offsets(corner)
-            .dst_subresource(layers)
+            .dst_subresource(COLOR_LAYERS)
             .dst_offsets(corner);
-        let extent = sc.extent;
-        let view = sc.views[index as usize];
-        let window_raw = window_image.raw;
-        // The window's copy and the tool panel are timed as passes too: on a CPU device they are
-        // part of what the frame costs.
+        let (image, range) = (target.image, barrier::color());
         self.renderer.time("window copy", |ctx, cmd| {
             barrier::image(
                 ctx,
@@ -335,14 +377,21 @@ impl Gpu {
                 barrier::COLOR_ATTACHMENT,
             );
             Ok(())
-        })?;
+        })
+    }
+
+    /// The timed "panel" pass: egui's triangles drawn straight into the swapchain image, over the
+    /// copied window.
+    fn record_panel(&mut self, plan: &Plan<'_>, target: &Target) -> Result<()> {
         let attachment = [vk::RenderingAttachmentInfo::default()
-            .image_view(view)
+            .image_view(target.view)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE)];
+        let extent = target.extent;
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
         let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&attachment);
+        let ui = self.ui.as_mut().expect("made with the swapchain");
         self.renderer.time("panel", |ctx, cmd| {
             // SAFETY: the swapchain image is a colour attachment in the layout named.
             unsafe { ctx.raw().cmd_begin_rendering(cmd, &info) };
@@ -352,9 +401,15 @@ impl Gpu {
             // SAFETY: rendering began above.
             unsafe { ctx.raw().cmd_end_rendering(cmd) };
             drawn
-        })?;
+        })
+    }
+
+    /// Moves the swapchain image from the panel's drawing to presentation; when the plan captures
+    /// the frame, through a copy into the capture buffer made visible to the host.
+    fn record_to_present(&self, plan: &Plan<'_>, target: &Target) {
         let ctx = &self.renderer.ctx;
-        let raw = ctx.raw();
+        let (cmd, _) = self.renderer.frame_commands();
+        let (image, range) = (target.image, barrier::color());
         let present = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
         if let (true, Some(buffer)) = (plan.capture, self.capture.as_ref()) {
             barrier::image(
@@ -366,14 +421,21 @@ impl Gpu {
                 barrier::COLOR_ATTACHMENT,
                 barrier::TRANSFER_READ,
             );
-            let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(vk::Extent3D {
-                width: w,
-                height: h,
+            let (width, height) = (target.extent.width, target.extent.height);
+            let region = vk::BufferImageCopy::default().image_subresource(COLOR_LAYERS).image_extent(vk::Extent3D {
+                width,
+                height,
                 depth: 1,
             });
             // SAFETY: `cmd` is recording; the buffer holds the whole image, which is in TRANSFER_SRC.
             unsafe {
-                raw.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+                ctx.raw().cmd_copy_image_to_buffer(
+                    cmd,
+                    image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer.raw,
+                    &[region],
+                )
             };
             barrier::to_host(ctx, cmd, buffer.raw);
             barrier::image(
@@ -396,6 +458,5 @@ impl Gpu {
                 present,
             );
         }
-        Ok(mesh)
     }
 }

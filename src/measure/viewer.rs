@@ -6,8 +6,8 @@
 //! frames per second. The swapchain copy and the tool panel are left out (they need a display).
 
 use crate::brdf::Material;
-use crate::editor::state::Layout;
 use crate::error::Result;
+use crate::layout::Layout;
 use crate::render::compose::{Parts, Placement, WINDOW_FORMAT};
 use crate::render::{Estimator, Progress, Renderer, Settings, View};
 use crate::scene::{Camera, Mesh};
