@@ -7,9 +7,9 @@
 // cleared to (0, 0, 0, 1), and the pass runs over the list of 2 × 2 blocks with a pixel off the
 // object that `compact.comp` wrote (each by its top-left pixel), storing the environment at those
 // pixels alone: on llvmpipe a texture lookup runs for every lane of a vector whatever its mask, so
-// over the whole image it would run at every pixel (on 2-core lavapipe, 512², the goal scene: the
-// compact pass's lookups over the image cost about 3 ms; this pass over the blocks 1.8 ms). The same arithmetic, so the
-// same image bit for bit.
+// over the whole image it would run at every pixel, three quarters of them on the object, and the
+// compact pass's lookups over the image cost more than this pass over the blocks (docs/renderer.md,
+// Alternatives measured and rejected). The same arithmetic, so the same image bit for bit.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #define PIXELS_BINDING 3

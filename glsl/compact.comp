@@ -17,14 +17,16 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // LATER: the frame's sparse filter (denoise_sparse.comp, which reads and writes every listed pixel
 // anyway) adds the diffuse term, and the image was cleared to (0, 0, 0, 1) before this pass
 // (`CompactPass::record`): nothing is stored here, and the background is left to the background
-// pass over the blocks this one lists (binding 7). On llvmpipe an image store goes lane by lane
-// (about 8 ns a pixel), and a texture lookup runs for every lane whatever its mask (2-core lavapipe,
-// the bench's goal scene at 512²: the compact pass without its lookups and stores 9.8 → 6.3 ms). A constant, not a push
-// constant: llvmpipe runs both sides of an `if`, so the code of both ways would run, masked, in every frame.
+// pass over the blocks this one lists (binding 7). On llvmpipe an image store goes lane by lane,
+// and a texture lookup runs for every lane whatever its mask, so the compact pass without its
+// lookups and stores costs much less (docs/renderer.md, Alternatives measured and rejected). A
+// constant, not a push constant: llvmpipe runs both sides of an `if`, so the code of both ways
+// would run, masked, in every frame.
 layout(constant_id = 0) const bool LATER = false;
 // PIXELS: the list of pixels is written (the blocks' always). A frame whose passes all run over the
 // blocks leaves it to the next frame that keeps the G-buffer and needs it (`compact::Start`): its
-// appends cost about 1 ms of a 512² frame on llvmpipe (the goal scene).
+// appends are a cost on llvmpipe that nothing in such a frame would repay (docs/renderer.md,
+// Alternatives measured and rejected).
 layout(constant_id = 1) const bool PIXELS = true;
 layout(set = 0, binding = 0, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 // count, then groups (x, y, z) (the header written as (0, 0, 1, 1) before this pass), then x | y << 16.
@@ -44,8 +46,8 @@ layout(std430, set = 0, binding = 6) readonly buffer Lights { uvec4 count; vec4 
 // LATER: the 2 × 2 blocks with a pixel inside the image and off the object, each by its top-left
 // pixel, for the background pass over them (background.comp BLOCKS): on llvmpipe a texture lookup
 // runs for every lane of a vector, so here it would run at every pixel of the image, three quarters
-// of them on the object (about 3 ms of a 512² frame on 2-core lavapipe; the background pass over the
-// blocks takes 1.8 ms).
+// of them on the object, at more cost than the background pass over the blocks (docs/renderer.md,
+// Alternatives measured and rejected).
 layout(std430, set = 0, binding = 7) buffer BackgroundBlocks { uint count; uint groups[3]; uint at[]; } background;
 
 // Whether pixel p (inside the image or not) is listed (`facing` in pass.glsl), and its unit normal.
@@ -72,9 +74,9 @@ bool listed_at(ivec2 p, out vec3 n, out bool object) {
     }
 
 // One invocation a 2 × 2 block: each pixel's G-buffer texel is read once, and its test is the one dot
-// product. At 512² on 2-core lavapipe (the bench's goal scene, medians of 7 frames in two rounds
-// of alternating binaries): 4.7 → 2.8 ms against one invocation a pixel, where a block's first pixel
-// read and tested the other three again (with their tangent frames) to choose its representative.
+// product: cheaper than one invocation a pixel, where a block's first pixel reads and tests the
+// other three again (with their tangent frames) to choose its representative (docs/renderer.md,
+// Alternatives measured and rejected).
 // The same lists in another order: the same images, bit for bit.
 void main() {
     DiffuseLight d;

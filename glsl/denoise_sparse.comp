@@ -8,19 +8,19 @@
 // Each shaded pixel p gets the normal-weighted mean of the blocks within R pixels of it along each
 // axis (block c taken at pixel 2 c): along an even coordinate the blocks −1, 0, +1 of its own, along
 // an odd one −1 … +2. (So an odd coordinate's window holds one of the 3 strata of the lobe passes'
-// shifts twice, `lobe.comp` SPARSE; the outer two at half weight, which balances them, measured
-// slightly worse on the sweep's rough scenes at 64²: 8 spp 0.019–0.047 → 0.019–0.048.) Its
+// shifts twice, `lobe.comp` SPARSE; the outer two at half weight, which balances them, is no more
+// accurate on the sweep's rough scenes: docs/renderer.md, Alternatives measured and rejected.) Its
 // light term is interpolated bilinearly from the 2 × 2 nearest blocks (an even coordinate sits on
 // its block, an odd one halfway to the next), normal-weighted too. An invocation takes one block's
 // four pixels, whose windows together span its 4 × 4 neighbours, read once. The loops are unrolled
 // and skip nothing (an unmarked block weighs 0): on llvmpipe the same loops with a `continue` cost
-// about twice as much (64², 2-core lavapipe: 0.40–0.53 ms against 0.20). The pixel's own block is always marked (its
-// list holds every block with a shaded pixel); where every weight underflows, the pixel takes that block's values.
+// more, since an `if` skips nothing there (docs/renderer.md, Alternatives measured and rejected).
+// The pixel's own block is always marked (its list holds every block with a shaded pixel); where
+// every weight underflows, the pixel takes that block's values.
 //
 // Dispatched over `compact.comp`'s list of blocks (those with a shaded pixel), not over the image:
 // llvmpipe runs both sides of an `if` (pass.glsl), so a vector of blocks off the mesh would run the
-// whole filter, masked (512², the bench's goal scene, 2-core lavapipe: 3.7–4.0 → 3.3–3.4 ms over the
-// list).
+// whole filter, masked (docs/renderer.md, Alternatives measured and rejected).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #define PIXELS_BINDING 4
@@ -39,7 +39,7 @@ layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2, rgba32f) readonly uniform image2D cells_light;
 // The G-buffer: each pixel's normal and whether it is shaded (`facing` in pass.glsl, as compact.comp
 // listed it), read here instead of an image of every pixel's normal and mark written by
-// compact.comp: one full-size image store less (about 0.8 ms at 512² on llvmpipe).
+// compact.comp: one full-size image store less (on llvmpipe an image store goes lane by lane).
 layout(set = 0, binding = 3, r32ui) readonly uniform uimage2D gnrm;  // gbuffer_code
 // DIFFUSE: the frame's compact pass left the listed pixels at (0, 0, 0, 1) (`compact.comp` LATER),
 // and each pixel takes the diffuse term here first, the same arithmetic (albedo fparams.rgb,

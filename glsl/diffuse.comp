@@ -1,9 +1,9 @@
 #version 460
 // Paper §4 diffuse pass: ρ_d/π · E(n), E from the 9 SH coefficients of the environment's
 // irradiance (Ramamoorthi & Hanrahan 2001; the coefficients arrive multiplied by Â_l). Over the
-// list of shaded pixels (compact.comp), like the lobe passes: at 512² on 2-core lavapipe, the bench's
-// material 4.2 → 3.0 ms (`key`), 3.1 → 2.2 (`fis`) against the image-wide dispatch with early
-// returns, alternating binaries; the same pixels, the same image.
+// list of shaded pixels (compact.comp), like the lobe passes: cheaper on llvmpipe than the
+// image-wide dispatch with early returns, where a vector of pixels off the mesh still runs the
+// pass masked; the same pixels, the same image.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #define PIXELS_BINDING 4

@@ -80,7 +80,8 @@ layout(constant_id = 11) const bool REACH_TEST = false;  // LIGHTS, one narrow c
 // sparse cells (SPARSE), 3 the cells with the light term at each pixel; 4 any of them, as fparams.y
 // says (0, 1 or 2, 3, 4: the editor's stand-in while a view's own pipeline is built). A constant,
 // not a push constant: llvmpipe runs both sides of every `if` (pass.glsl), so the other outputs'
-// code would run, masked, in every pass (`lobe::Output` gives the measured cost).
+// code would run, masked, in every pass (docs/renderer.md, Alternatives measured and rejected,
+// gives the cost).
 layout(constant_id = 12) const uint OUTPUT = 0u;
 const bool ANY_OUTPUT = OUTPUT == 4u;
 // REACH_TEST: how many lights the cone table holds (1 to MAX_LIGHTS, `lobe::Variant::light_slots`):
@@ -392,15 +393,13 @@ void main() {
     // strata of ξ₁ that the window's sets fill (for N = 2^m their ξ₁ are the multiples of
     // 1 / (W N), shifted), where a hash per pixel stops at the middle of the pixel's own last
     // stratum, 1 − ½/N: a shift toward 1 would reach −log(1 − ξ₁) → ∞, where a Ward lobe's weight
-    // exp(E_W − E_1) grows without bound (at 32², Ward α 0.5, 256 spp, a hash per pixel: 4.2 % off
-    // the reference with a few silhouette pixels 10× too bright, 1.3 % capped; the unshifted set's
-    // largest ξ₁ is 1 − 1/N). Measured against a hash per pixel (2-core lavapipe, α 0.5, the mean of 8
-    // frames' seeds, 4 scenes of venice, city, studio): at 64², 1 spp 0.07–0.15 → 0.04–0.11,
-    // 4 spp 0.039–0.060 → 0.027–0.040; at 32², lower at 1–4 spp on all four, but at 8 spp higher
-    // on studio (0.034 → 0.043), hence the hash from 5 samples on (8 the next count measured).
-    // Most of the 1-spp gain on Ward lobes is the cap's (the mean of 8 seeds at 64², 1 spp, venice
-    // Ward: hash 0.152, strata with the pixel's own cap 0.109, with the window's 0.077); a hash with
-    // the window's cap would let a pixel alone reach far into Ward's tail (the silhouettes above).
+    // exp(E_W − E_1) grows without bound (at 32², Ward α 0.5, 256 spp, a hash per pixel without the
+    // cap leaves a few silhouette pixels far too bright; the unshifted set's largest ξ₁ is 1 − 1/N).
+    // Against a hash per pixel (α 0.5 on venice, city and studio), the strata lower the error at 1
+    // and 4 spp at 64² and 32², but not at 8 spp on studio at 32², hence the hash from 5 samples on
+    // (8 the next count measured). Most of the 1-spp gain on Ward lobes is the cap's (strata with
+    // the pixel's own cap gain less than with the window's); a hash with the window's cap would let
+    // a pixel alone reach far into Ward's tail (the silhouettes above).
     // The price: a pixel keeps its stratum from frame to frame, so where the filter's weights are
     // uneven (silhouettes, creases, the image's edge) a pattern of period 7 stays in the image
     // instead of noise.
@@ -435,10 +434,9 @@ void main() {
     if (lit) light_samples(f, b);
     vec3 sum = lobe_sum(l, q, wo, f, omega_texel, n, rot, lit);
     // A light term of zero (every light out of reach) is not added: on llvmpipe an image store goes
-    // lane by lane, a masked-off lane at the price of a test (2-core lavapipe, the bench's goal scene at
-    // 512², four rounds of alternating binaries: its α 0.1, 0.05 × 0.3 and split α 0.2 lobes' sparse
-    // passes 0.1–0.3 ms less each). The same images: x + 0 = x (but for the sign of a zero), and a
-    // NaN is still added.
+    // lane by lane, a masked-off lane at the price of a test, so the sparse lobe passes of the bench's
+    // goal scene cost less (docs/renderer.md, Alternatives measured and rejected). The same images:
+    // x + 0 = x (but for the sign of a zero), and a NaN is still added.
     if (sparse) {
         // The block's samples into `cells` (binding 1), its light term into `cells_light` (binding
         // 9): the filter averages the first and interpolates the second. With pixel_lights, each

@@ -2,9 +2,10 @@
 // The device's arithmetic peak as `bench` measures it: every invocation runs `iterations` rounds of
 // 4 × 8 vec4 fused multiply-adds on 8 independent chains (2 flops a lane each, 256 a round),
 // then writes their sum so that nothing is optimised away. flops = invocations × iterations × 256.
-// Chosen as the fastest on lavapipe (256-bit registers, 8 invocations each), GFLOP/s: 3 chains 15,
-// 16 chains 36, 8 chains 39, 8 chains unrolled 4× 58–60, unrolled 8× 48; `a * m + c` instead of
-// fma() ran half as fast. A GPU hides the latency across invocations and needs none of this.
+// Chosen as the fastest on lavapipe (256-bit registers, 8 invocations each) of the chain counts and
+// unrollings tried, and fma() rather than `a * m + c`, which runs far slower there (docs/renderer.md,
+// Alternatives measured and rejected). A GPU hides the latency across invocations and needs none
+// of this.
 layout(local_size_x = 64) in;
 layout(std430, set = 0, binding = 0) writeonly buffer Out { vec4 v[]; } result;
 layout(push_constant) uniform Push { uint iterations; float m; float c; } pc;

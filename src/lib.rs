@@ -26,6 +26,7 @@ pub mod reference;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod text;
 pub mod vk;
 
 pub use error::{Error, Result};

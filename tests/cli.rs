@@ -599,3 +599,31 @@ fn check_explains_symmetrised_rotated_lobes_exceeding_albedo_one() {
     let text = check_ok(&m, &[]);
     assert!(text.contains("symmetrising rotated lobes"), "{text}");
 }
+
+/// Each kind of failure that is not the user's ends with a line that says what it is and a status
+/// of its own (src/error.rs): an internal invariant broken names a bug (5) and never reads as a
+/// validation message, which keeps its label (4); a resource the system refused is 2. Debug builds
+/// fail on request (`BRDF_SHOP_FAIL`, src/main.rs) before the command runs.
+#[test]
+fn failures_that_are_not_the_users_say_what_they_are() {
+    for (kind, want_code, start) in [
+        ("bug", 5, "brdf-shop: internal error (a bug in brdf-shop): "),
+        ("validation", 4, "brdf-shop: Vulkan validation: "),
+        ("system", 2, "brdf-shop: cannot start a thread"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_brdf-shop"))
+            .args(["eval", "--material", "unread.brdf.json"])
+            .env("BRDF_SHOP_FAIL", kind)
+            .stdin(Stdio::null())
+            .output()
+            .expect("the binary runs");
+        let stderr = String::from_utf8(out.stderr).expect("UTF-8 stderr");
+        assert_eq!(out.status.code(), Some(want_code), "{kind}: {stderr}");
+        assert!(out.stdout.is_empty(), "{kind}: printed on stdout");
+        assert_eq!(stderr.lines().count(), 1, "{kind}: {stderr:?}");
+        assert!(stderr.starts_with(start), "{kind}: {stderr}");
+        if kind != "validation" {
+            assert!(!stderr.contains("Vulkan validation"), "{kind}: {stderr}");
+        }
+    }
+}

@@ -1,7 +1,7 @@
 //! The editor as a user drives it: under Xvfb on this machine's Vulkan device (lavapipe in CI),
 //! `edit --replay S --screenshot P --out M --quit` paints the strokes through the window's input path,
 //! saves a screenshot and the material, and leaves the recovery file. Debug builds run with the
-//! validation layer, and a validation error ends the editor with exit status 2.
+//! validation layer, and a validation error ends the editor with exit status 4.
 
 use std::path::Path;
 use std::process::Command;

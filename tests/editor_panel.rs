@@ -2,7 +2,7 @@
 //! device (lavapipe in CI), `edit --replay S --export FORMAT=PATH … --screenshot P --out M --quit`
 //! writes each export through the button's code path; the panel's verdict is checked on the editor
 //! state without a window. Debug builds run with the validation layer, and a validation error ends
-//! the editor with exit status 2.
+//! the editor with exit status 4.
 
 use std::path::Path;
 use std::process::Command;

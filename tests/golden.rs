@@ -1,6 +1,6 @@
 //! The frames the renderer draws are the frames it is known to draw, bit for bit: every estimator,
 //! canvas and mesh views, sparse and dense filtered frames, frames that keep their G-buffer,
-//! previews at other sizes, the refinement's sum, both frame plans. Each image's pixels (the `f32`
+//! previews at other sizes, the refinement's sum, both device plans. Each image's pixels (the `f32`
 //! bits of every channel) are hashed and compared with `tests/golden/frames.txt`, the hashes of the
 //! images this code drew on lavapipe. A change to what a frame records that should not change an
 //! image is checked by this test; a change that should (a new model, a shader fix) writes the file

@@ -118,6 +118,8 @@ fn decoded_size(file: &Path) -> Option<(u32, u32)> {
 /// - `check` prints the line `verdict: physically correct` (stdout);
 /// - `render` prints the GPU time it took (stderr, `rendered WxH on … ms of GPU time …`) and, for
 ///   the mesh view, which lights the `key` estimator split off the map (`key estimator: …`);
+///   `render --plan` without `--out` prints the frame's plan (stdout, from `plan of the mesh view: `,
+///   the G-buffer's pass first, then what is left out);
 /// - `reference` prints its size and sample count (stderr, `reference WxH at N spp …`).
 fn check_promises(line: &str, dir: &Path, stdout: &str, stderr: &str) {
     let words: Vec<&str> = line.split_whitespace().collect();
@@ -138,6 +140,10 @@ fn check_promises(line: &str, dir: &Path, stdout: &str, stderr: &str) {
         Some("check") => {
             let want = "verdict: physically correct";
             assert!(stdout.lines().any(|l| l == want), "{line:?}: no line {want:?} on stdout:\n{stdout}");
+        }
+        Some("render") if words.contains(&"--plan") && out.is_none() => {
+            assert!(stdout.starts_with("plan of the mesh view: "), "{line:?}: no plan on stdout:\n{stdout}");
+            assert!(has(stdout, "  1. gbuffer", &[]) && has(stdout, "left out:", &[]), "{line:?}:\n{stdout}");
         }
         Some("render") => {
             let dims = dims.expect("the README's render lines give --size");

@@ -344,3 +344,22 @@ fn rough_ward() -> Material {
         lobes: vec![common::lobe(0.8, 0.5, 0.5)],
     }
 }
+
+/// A broken invariant of the renderer is a bug (exit status 5), never a validation message: the
+/// mesh view read back before it was rendered, and a refinement frame of an estimator other than
+/// `mis`.
+#[test]
+fn broken_invariants_are_bugs_not_validation() {
+    let mut r = renderer();
+    let unread = r.read_mesh_view().map(|_| ()).expect_err("no mesh view was rendered");
+    let refined = r
+        .record(&rough_ward(), &settings(16, 1, Estimator::Fis), Progress::Refine)
+        .map(|_| ())
+        .expect_err("refinement frames are mis frames");
+    for e in [unread, refined] {
+        assert!(matches!(e, brdf_shop::Error::Bug(_)), "{e:?}");
+        assert_eq!(e.exit_status(), brdf_shop::error::EXIT_BUG);
+        assert!(e.to_string().starts_with("internal error (a bug in brdf-shop): "), "{e}");
+    }
+    r.ctx.check_validation().expect("no validation error");
+}

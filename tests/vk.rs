@@ -62,6 +62,10 @@ fn validation_errors_are_caught() {
     }
     let errors = ctx.validation_errors();
     assert!(errors.iter().any(|e| e.contains("VUID-VkBufferCreateInfo-size")), "{errors:?}");
+    // Reported with the layer's label and the validation exit status.
+    let e = ctx.check_validation().expect_err("the layer's error fails the check");
+    assert!(matches!(e, Error::Validation(_)) && e.to_string().starts_with("Vulkan validation: "), "{e}");
+    assert_eq!(e.exit_status(), brdf_shop::error::EXIT_VALIDATION);
 }
 
 /// The pipeline cache: a pipeline built through it is saved to its file with this device's header;

@@ -16,8 +16,9 @@ vec3 irradiance(vec3 c[9], vec3 n) {
 
 // The coefficients and the lights (`with_lights`: the key estimator's; zero power past their count),
 // read where no lane is masked off and at constant indices: llvmpipe broadcasts a uniform
-// storage-buffer read only there (profiled on 2-core lavapipe: 27 → 4.4 ms at 512²). The lights' table holds
-// 4 lights (`environment::cone_table`); without lights the SH coefficients stand in for it (9 vec4,
+// storage-buffer read only there; elsewhere it reads lane by lane, and the pass costs several times
+// as much. The lights' table holds 4 lights (`environment::cone_table`); without lights the SH
+// coefficients stand in for it (9 vec4,
 // as long as the count and the 4 lights: `diffuse::term`).
 struct DiffuseLight { vec3 c[9]; vec4 dir[4]; vec4 power[4]; };
 #define READ_DIFFUSE_LIGHT(out_d, sh_buffer, lights_buffer, with_lights)                               \

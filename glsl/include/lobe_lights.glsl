@@ -59,10 +59,10 @@ float point_scale(vec3 b, vec4 shape, float wo_z) {
 // (`point_view`): b in world space, and the axes whose dot products with the half vector h = a + b
 // give the exponent's hx/αx and hy/αy (the lobe's tangent turned by its angle); h_z = wz + b_z. Only
 // for wz > 0: below the horizon its value means nothing, and the caller drops it (a select). A
-// point costs no change of frame and one reciprocal. At 512² on 2-core lavapipe (the bench's
-// goal scene, medians of 7 frames in two rounds of alternating binaries), against the point taken
-// to the local frame with four divisions: the α 0.02 lobe's pass (212 points) 12.5–13.0 → 11.3 ms,
-// the others 0.2–0.9 ms each; the image within 5·10⁻⁷ relative L1 (rounding).
+// point costs no change of frame and one reciprocal: every lobe pass of the bench's goal scene is
+// cheaper than with the point taken to the local frame with four divisions, most of all the sharp
+// lobe's of many points, and the image is the same within rounding (docs/renderer.md, Alternatives
+// measured and rejected).
 // A reciprocal facet lobe (FACET, `facet_view`): bw = ω_o in world space, ax, ay, az the facet
 // frame's axes (the tangent ones turned by the lobe's angle, over αx and αy), so h = a + ω_o gives
 // the exponent's s/αx and t/αy as dot(h, ax) / h_z and dot(h, ay) / h_z with h_z = dot(h, az), and
@@ -336,10 +336,10 @@ void light_samples(Frame f, vec3 b) {
 // light term of the four pixels of block c, each with its own reach test, in one loop over the points
 // that reads each point once for the four. In a loop llvmpipe reads a buffer lane by lane, even at an
 // index the same for every lane (the loop counter is not an always-uniform offset to NIR, see
-// light_set above): the point's six floats are 48 scalar loads for a vector of 8,
-// about as much as the point's arithmetic. At 512² on 2-core lavapipe, the bench's goal scene: its α 0.02
-// lobe (212 points, 4 pixels a block) 10.1–10.9 → 7.6–7.9 ms against a loop per pixel. With REACH_TEST and tiles,
-// each light's points run for the blocks with a pixel within its reach, and add at all four pixels
+// light_set above): the point's six floats are 48 scalar loads for a vector of 8, about as much as
+// the point's arithmetic, so one read for four pixels makes the goal scene's sharp lobe cheaper than
+// a loop per pixel (docs/renderer.md, Alternatives measured and rejected). With REACH_TEST and
+// tiles, each light's points run for the blocks with a pixel within its reach, and add at all four pixels
 // (a light out of a pixel's reach adds below e^(−25) of its peak there); a pixel within no light's
 // reach takes nothing.
 void block_points(ivec2 c, GpuLobe l, vec4 q) {

@@ -9,11 +9,11 @@
 // lane there and skip masked lanes.) Code a dispatch does not need must go by a specialisation
 // constant (lobe.comp's OUTPUT) or by dispatching over a list of the pixels that need
 // it (compact.comp). A loop is the one real branch: its body always runs once, and it goes round
-// again while any lane is still active (2-core lavapipe: a 64-round loop under a condition false
-// everywhere cost 1.6 ms at 512² against 68 ms when taken: one masked round). So a `for (i < n)`
-// loop costs n + 1 bodies (the last runs only to find every lane done), and the sample loops here
-// are do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 3 → 2
-// bodies, identical images). Code that only some samples need costs its full price in every
+// again while any lane is still active (a loop under a condition false everywhere costs one masked
+// round, a small part of taking it). So a `for (i < n)` loop costs n + 1 bodies (the last runs
+// only to find every lane done), and the sample loops here
+// are do-while loops where the count is known to be at least 1 (lobe passes at 8 spp: 2 bodies
+// instead of 3, identical images). Code that only some samples need costs its full price in every
 // sample unless it moves out of the sample loop into a loop of its own, which runs one masked
 // round for a vector that needs none of it (lobe.comp's `light_hits`).
 #ifndef PASS_GLSL
@@ -45,9 +45,9 @@ bool inside(ivec2 p) { return p.x < int(pc.size.x) && p.y < int(pc.size.y); }
 
 // Whether a G-buffer texel N (`gbuffer_texel`: the normal, alpha 1 marking the object) holds the
 // mesh facing the eye, with its shading frame and ω_o (local): the pixels `compact.comp` lists and
-// the mesh passes shade. ω_o is the reverse of the pixel's camera ray, on which the surface point lies (the
-// G-buffer keeps no position: one image load a pixel instead of two, and about 5 ms
-// less rasterising at 512² on llvmpipe).
+// the mesh passes shade. ω_o is the reverse of the pixel's camera ray, on which the surface point
+// lies (the G-buffer keeps no position: one image load a pixel instead of two, and less
+// rasterising on llvmpipe).
 bool shaded(ivec2 p, vec4 N, out Frame f, out vec3 wo) {
     f = frame_from_normal(normalize(N.xyz));
     wo = to_local(f, -camera_ray(p));

@@ -13,8 +13,8 @@ pub const ALPHA_MIN: f64 = 1.0e-4;
 pub const ALPHA_MAX: f64 = 1.0;
 /// The most lobes a material may have (files, brushes, the editor). The paper's materials have a
 /// handful, the benchmark goes to 32 and the stability report to 64. Work is linear in lobes: each
-/// costs `check` a quadrature over 288 views (measured: 256 split lobes, 389 s on the 2-core machine
-/// under load, shown by a progress bar and stoppable with Ctrl-C) and the GPU one pass and two
+/// costs `check` a quadrature over 288 views (minutes for 256 split lobes on the 2-core machine,
+/// shown by a progress bar and stoppable with Ctrl-C) and the GPU one pass and two
 /// timestamps per frame; 256 bounds both while leaving 4× the largest material in use.
 pub const MAX_LOBES: usize = 256;
 

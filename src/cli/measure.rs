@@ -63,6 +63,7 @@ pub fn bench(quick: bool, goal: bool, json: Option<&Path>, hdri: Option<&Path>) 
         let mut doc = bench::json(&rows, r.device_name(), &plan, peak);
         doc["driver"] = bench::driver_json(&r.ctx.device.info);
         doc["device_plan"] = serde_json::json!(r.device_plan.name());
+        doc["goal_plan"] = bench::goal_plan_json(&mut r, &plan)?;
         doc["clocks"] = match (clocks_start, clocks_end) {
             (Some(a), Some(b)) => serde_json::json!({ "start": a, "end": b }),
             _ => serde_json::Value::Null,

@@ -31,7 +31,11 @@ impl std::fmt::Display for NotPhysicallyCorrect {
 
 impl std::error::Error for NotPhysicallyCorrect {}
 
-/// A mistake in how the program was called (exit status 1).
+impl NotPhysicallyCorrect {
+    pub const EXIT_STATUS: u8 = 3;
+}
+
+/// A mistake in how the program was called (exit status 1, [`brdf_shop::error::EXIT_USER`]).
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct UsageError(pub String);
@@ -233,7 +237,7 @@ pub fn parse() -> Result<Cli, ExitCode> {
                 let first = first.trim_start_matches("error: ");
                 let first = if first.is_empty() { "bad command line" } else { first };
                 eprintln!("brdf-shop: {} (see brdf-shop --help)", tidy_message(first));
-                ExitCode::from(1)
+                ExitCode::from(brdf_shop::error::EXIT_USER)
             }
         }
     })

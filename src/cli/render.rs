@@ -33,11 +33,16 @@ pub fn run(args: &SceneArgs) -> anyhow::Result<()> {
     let key_lights = (scene.settings.estimator == Estimator::Key && scene.settings.view == View::Mesh)
         .then(|| renderer.key_lights())
         .flatten();
-    let mut extra = vec![("plan", plan.to_json())];
+    let mut extra = vec![
+        ("plan", plan.to_json()),
+        ("barriers", serde_json::json!(frame.commands.barriers)),
+        ("dispatches", serde_json::json!(frame.commands.dispatches)),
+    ];
     extra.extend(key_lights.map(|k| ("key_lights", k.to_json())));
     scene::write_outputs(args, &mut frame.image, renderer.device_name(), &scene, &passes, frame.frame_ms, extra)?;
     if args.plan {
         print!("{}", timed_plan(&plan, &passes));
+        println!("{} dispatches, {} pipeline barriers", frame.commands.dispatches, frame.commands.barriers);
     }
     scene::report_env(&scene);
     if let Some(k) = key_lights {

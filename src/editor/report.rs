@@ -7,9 +7,9 @@
 //! window learns a report is ready.
 //!
 //! The worker and its thread pool run in the idle scheduling class ([`yield_to_rendering`]): on
-//! lavapipe the GPU is these same CPU cores, and a report measured beside a frame took half of
-//! them (2-core lavapipe, 1280×720: the interaction frames' passes run 1.9× slower while a report is
-//! measured at normal priority, frame medians 432–452 ms against 221–244 ms in the idle class). Idle, the report waits
+//! lavapipe the GPU is these same CPU cores, and a report measured beside a frame at normal
+//! priority takes half of them, which slows the interaction frames about as much
+//! (docs/performance.md, The editor's frame). Idle, the report waits
 //! for the frames: while strokes keep both cores busy it is marked as updating, and it finishes in the
 //! first idle moment. On a machine whose GPU is not its CPU nothing changes.
 
@@ -95,8 +95,8 @@ impl Drop for ReportWorker {
     fn drop(&mut self) {
         // Closing the request channel ends the worker after the report it is measuring; nobody
         // waits for that. The worker runs only on cores nothing else wants: when other programs keep
-        // them busy, joining it held the editor's exit until they stopped (a `--quit` session beside
-        // two busy processes on 2 cores: 200 s, its frames 0.9 s). The thread holds no GPU object and
+        // them busy, joining it would hold the editor's exit until they stop (a `--quit` session
+        // beside two busy processes on 2 cores would wait minutes). The thread holds no GPU object and
         // writes nothing; it ends with its report, or with the process.
         self.requests = None;
         drop(self.thread.take());

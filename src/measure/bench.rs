@@ -258,7 +258,7 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
             Ok(crate::render::Recorded::Done) => {}
             Ok(crate::render::Recorded::Waiting) => {
                 r.abandon_frame()?;
-                return Err(crate::Error::input("bench", "a lobe pipeline was still being built"));
+                return Err(crate::Error::Bug("bench: a lobe pipeline was still being built".into()));
             }
             Err(e) => {
                 let _ = r.abandon_frame();
@@ -272,7 +272,7 @@ fn measure_kept(r: &mut Renderer, m: &Material, s: &Settings, repeats: usize, pi
     let frames: Vec<FrameTimes> =
         r.take_finished().into_iter().skip(2).map(|f| FrameTimes { passes: f.timings, frame_ms: f.frame_ms }).collect();
     if frames.iter().any(|f| f.passes.iter().any(|t| t.name == "gbuffer")) {
-        return Err(crate::Error::input("bench", "a frame with the camera unchanged rasterised its G-buffer again"));
+        return Err(crate::Error::Bug("bench: a frame with the camera unchanged rasterised its G-buffer again".into()));
     }
     Ok(spreads(frames, pixel_samples))
 }
@@ -318,6 +318,19 @@ impl Rows {
         }
         Ok(())
     }
+}
+
+/// The goal scene's plan (`render::plan`) at the plan's size on the sphere, with the barriers and
+/// dispatches one of its frames records (`bench --json`'s `goal_plan`).
+pub fn goal_plan_json(r: &mut Renderer, plan: &Plan) -> Result<serde_json::Value> {
+    let (m, s) = (goal_material()?, goal_at(plan.size));
+    r.set_mesh(&Mesh::sphere())?;
+    let planned = r.plan(&m, &s, crate::render::Progress::Fresh, false);
+    let frame = r.render(&m, &s)?;
+    let mut json = planned.to_json();
+    json["barriers"] = serde_json::json!(frame.commands.barriers);
+    json["dispatches"] = serde_json::json!(frame.commands.dispatches);
+    Ok(json)
 }
 
 /// The goal scene's settings at `size`: the default estimator, 8 spp.

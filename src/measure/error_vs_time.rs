@@ -187,7 +187,9 @@ fn sweep(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Re
         }
         for mat_name in &plan.materials {
             let Some((_, m)) = all.iter().find(|(n, _)| n == mat_name) else {
-                return Err(Error::input("error-vs-time", format!("unknown material {mat_name}")));
+                return Err(Error::Bug(format!(
+                    "error-vs-time: the plan names {mat_name}, which is not a report material"
+                )));
             };
             if let Some(b) = &bar {
                 b.set_message(format!("{env_name}/{mat_name}"));

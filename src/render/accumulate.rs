@@ -11,7 +11,8 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 2] = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
+pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
+    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
 
 pub struct AccumulatePass {
     pipeline: Pipeline,
@@ -38,13 +39,10 @@ impl AccumulatePass {
             targets.sum.discard_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
         }
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        descriptor::write(
-            ctx,
-            set,
-            &[Binding::StorageImage(targets.accum.view), Binding::StorageImage(targets.sum.view)],
-        );
+        descriptor::write(ctx, set, &[Binding::StorageImageRead(&targets.accum), Binding::StorageImage(&targets.sum)]);
         let push = [targets.width, targets.height, first as u32, 0, (samples as f32).to_bits(), 0, 0, 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
+        ctx.counts.dispatch();
         // SAFETY: `cmd` is recording with the compute pipeline bound.
         unsafe { ctx.raw().cmd_dispatch(cmd, targets.width.div_ceil(8), targets.height.div_ceil(8), 1) };
         barrier::memory(

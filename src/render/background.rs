@@ -11,7 +11,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 4] = [
+pub(crate) const BINDINGS: [vk::DescriptorType; 4] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -55,10 +55,10 @@ impl BackgroundPass {
         rec.set(
             pipeline,
             &[
-                Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(t.accum.view),
-                Binding::Sampled(env.texture.view, env.sampler),
-                Binding::Storage(&t.background_blocks),
+                Binding::StorageImageRead(&t.normal),
+                Binding::StorageImage(&t.accum),
+                Binding::Sampled(&env.texture, env.sampler),
+                Binding::StorageRead(&t.background_blocks),
             ],
         )
     }

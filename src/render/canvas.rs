@@ -9,7 +9,8 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 2] = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
+pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
+    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
 
 pub struct CanvasPass {
     pipeline: Pipeline,
@@ -24,7 +25,7 @@ impl CanvasPass {
     pub fn record(&self, rec: &Recording<'_>, material: &Buffer) -> Result<()> {
         let t = rec.targets;
         t.start_accum(rec.ctx, rec.cmd);
-        let set = rec.set(&self.pipeline, &[Binding::StorageImage(t.accum.view), Binding::Storage(material)])?;
+        let set = rec.set(&self.pipeline, &[Binding::StorageImage(&t.accum), Binding::StorageRead(material)])?;
         rec.dispatch(&self.pipeline, set, &rec.push);
         Ok(())
     }

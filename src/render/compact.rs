@@ -12,7 +12,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 8] = [
+pub(crate) const BINDINGS: [vk::DescriptorType; 8] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -99,13 +99,13 @@ impl CompactPass {
         let set = rec.set(
             pipeline,
             &[
-                Binding::StorageImage(t.normal.view),
+                Binding::StorageImageRead(&t.normal),
                 Binding::Storage(&t.pixels),
                 Binding::Storage(&t.blocks),
-                Binding::StorageImage(t.accum.view),
-                Binding::Sampled(env.texture.view, env.sampler),
-                Binding::Storage(sh),
-                Binding::Storage(lights),
+                Binding::StorageImage(&t.accum),
+                Binding::Sampled(&env.texture, env.sampler),
+                Binding::StorageRead(sh),
+                Binding::StorageRead(lights),
                 Binding::Storage(&t.background_blocks),
             ],
         )?;
@@ -120,9 +120,9 @@ impl CompactPass {
             ctx.raw().cmd_update_buffer(cmd, t.background_blocks.raw, 0, bytemuck::cast_slice(&header));
         }
         barrier::memory(ctx, cmd, barrier::TRANSFER_WRITE, barrier::COMPUTE_READ_WRITE);
-        // One invocation a 2 × 2 block, 8 × 8 invocations a group; the image's readers after it.
+        // One invocation a 2 × 2 block, 8 × 8 invocations a group. The lists' and the image's readers
+        // wait for it through the barriers derived from their accesses (`Recording::dispatch_over`).
         rec.dispatch_groups(pipeline, set, &push, (t.width.div_ceil(16), t.height.div_ceil(16)));
-        barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, LIST_READ);
         Ok(())
     }
 

@@ -12,7 +12,7 @@ use crate::vk::Buffer;
 use crate::vk::Context;
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 5] = [
+pub(crate) const BINDINGS: [vk::DescriptorType; 5] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_BUFFER,
@@ -53,11 +53,11 @@ impl DiffusePass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(t.accum.view),
-                Binding::Storage(sh),
-                Binding::Storage(lights),
-                Binding::Storage(&t.pixels),
+                Binding::StorageImageRead(&t.normal),
+                Binding::StorageImage(&t.accum),
+                Binding::StorageRead(sh),
+                Binding::StorageRead(lights),
+                Binding::StorageRead(&t.pixels),
             ],
         )?;
         rec.dispatch_over(&t.pixels, &self.pipeline, set, &push);

@@ -19,12 +19,10 @@ pub use summary::KeyLightSummary;
 
 /// How the `key` estimator's lobe passes read the residual's mip chain: bilinear within the nearest
 /// level, not between two. Their lod is already the sample's own footprint (`lobe::KEY_LOD_BIAS`),
-/// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost. Measured (2-core
-/// lavapipe): `assets/bench-4lobes.brdf.json`'s `key` lobe passes 237 → 206 ms at 512² (median of
-/// 9 interleaved runs); on the 64² sweep the error at 8 spp rose by 0–9 % of itself (city
-/// anisotropic 0.070 → 0.076, the filtered rough lobes unchanged), at 1 spp by up to 50 % on the
-/// sharp lobes. Point sampling as well (nearest texel) cut the passes to 181 ms but raised the
-/// 8-spp error by up to 70 % (city split Ward 0.029 → 0.049): not kept.
+/// and on llvmpipe a trilinear `RGBA32F` lookup is most of a sample's cost: one level makes the
+/// lobe passes cheaper for a small rise of the error at 8 spp (none on the filtered rough lobes),
+/// more at 1 spp on the sharp lobes. Nearest-texel lookups as well are cheaper still but raise the
+/// error far more than they save (docs/renderer.md, Alternatives measured and rejected).
 pub const KEY_MIPMAP: vk::SamplerMipmapMode = vk::SamplerMipmapMode::NEAREST;
 
 pub struct GpuEnvironment {

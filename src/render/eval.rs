@@ -11,7 +11,7 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 3] =
+pub(crate) const BINDINGS: [vk::DescriptorType; 3] =
     [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::STORAGE_BUFFER];
 
 pub struct EvalPass {
@@ -51,10 +51,11 @@ impl EvalPass {
             descriptor::write(
                 ctx,
                 set,
-                &[Binding::Storage(&made[0]), Binding::Storage(&made[1]), Binding::Storage(&made[2])],
+                &[Binding::StorageRead(&made[0]), Binding::Storage(&made[1]), Binding::StorageRead(&made[2])],
             );
             ctx.commands.run(&ctx.device, |cmd| {
                 self.pipeline.bind(ctx, cmd, set, &(pairs.len() as u32).to_ne_bytes());
+                ctx.counts.dispatch();
                 // SAFETY: `cmd` is recording with the compute pipeline bound.
                 unsafe { ctx.raw().cmd_dispatch(cmd, (n as u32).div_ceil(64), 1, 1) };
                 crate::vk::barrier::memory(

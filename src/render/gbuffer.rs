@@ -11,6 +11,9 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
+/// The pass's descriptor set layout: empty (the vertices and the push constants carry its inputs).
+pub(crate) const BINDINGS: [vk::DescriptorType; 0] = [];
+
 pub struct GBufferPass {
     pipeline: Pipeline,
 }
@@ -21,7 +24,7 @@ impl GBufferPass {
             ctx,
             (crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")),
             "gbuffer",
-            &[],
+            &BINDINGS,
             64,
             VERTEX_STRIDE,
             &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R32G32B32_SFLOAT, 12)],
@@ -50,22 +53,25 @@ impl GBufferPass {
             (true, Hidden::CounterClockwise) => (vk::CullModeFlags::BACK, vk::FrontFace::CLOCKWISE),
             _ => (vk::CullModeFlags::NONE, vk::FrontFace::CLOCKWISE),
         };
-        let none = crate::vk::barrier::EARLIER_READS;
+        to_attachments(ctx, cmd, targets);
+        self.draw(ctx, cmd, targets, mesh, view_proj, (cull_mode, front));
         let color = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
-        let depth_access = (
-            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
-        );
+        let read = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
+        let general = (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::GENERAL);
+        targets.normal.barrier(ctx, cmd, general.0, general.1, color, read);
+    }
+
+    /// Clears the attachments and draws the mesh's triangles into them.
+    fn draw(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        targets: &Targets,
+        mesh: &GpuMesh,
+        view_proj: &glam::Mat4,
+        (cull_mode, front): (vk::CullModeFlags, vk::FrontFace),
+    ) {
         let normal = &targets.normal;
-        normal.barrier(ctx, cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, none, color);
-        targets.depth.barrier(
-            ctx,
-            cmd,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            depth_access, // the previous frame's depth tests
-            depth_access,
-        );
         let clear = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
         let colors = [vk::RenderingAttachmentInfo::default()
             .image_view(normal.view)
@@ -117,11 +123,35 @@ impl GBufferPass {
             raw.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
             raw.cmd_end_rendering(cmd);
         }
-        let read = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
-        normal.barrier(ctx, cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::GENERAL, color, read);
     }
 
     pub fn destroy(self, ctx: &Context) {
         self.pipeline.destroy(ctx);
     }
+}
+
+/// The normal and depth images as attachments, after the earlier frame's reads and depth tests.
+fn to_attachments(ctx: &Context, cmd: vk::CommandBuffer, targets: &Targets) {
+    let none = crate::vk::barrier::EARLIER_READS;
+    let color = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+    let depth_access = (
+        vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+    );
+    targets.normal.barrier(
+        ctx,
+        cmd,
+        vk::ImageLayout::UNDEFINED,
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        none,
+        color,
+    );
+    targets.depth.barrier(
+        ctx,
+        cmd,
+        vk::ImageLayout::UNDEFINED,
+        vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+        depth_access, // the previous frame's depth tests
+        depth_access,
+    );
 }

@@ -1,8 +1,8 @@
 //! Pass 3 (paper §4), one dispatch per lobe: Halton QMC importance sampling of the rotated Ward
 //! lobe, four samples at a time, reading the prefiltered environment (or level 0 for `plain`).
 //! One pipeline per combination of specialisation constants a scene needs, built on first use:
-//! at once for a headless render, or on a thread of its own for the editor (a new lobe variant
-//! costs 0.3–0.5 s of LLVM on lavapipe, which would stall the window; the mesh view keeps its last
+//! at once for a headless render, or on a thread of its own for the editor (LLVM compiles a new
+//! lobe variant slowly on lavapipe, which would stall the window; the mesh view keeps its last
 //! image until the pipeline is there).
 
 use std::collections::HashMap;
@@ -12,6 +12,7 @@ use std::thread::JoinHandle;
 
 use ash::vk;
 
+use super::environment::GpuEnvironment;
 use super::Recording;
 use crate::brdf::{Lobe, Material, Normalization};
 use crate::scene::keylight::MAX_LIGHTS;
@@ -23,7 +24,7 @@ use crate::Result;
 mod policy;
 pub use policy::*;
 
-const BINDINGS: [vk::DescriptorType; 10] = [
+pub(crate) const BINDINGS: [vk::DescriptorType; 10] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -88,11 +89,9 @@ pub struct Variant {
 /// take, even where the condition is the same for the whole dispatch. Only a loop is a real branch
 /// (it goes round again while a lane is active). As push constants, the other outputs' code would run
 /// masked in every pass: the sparse passes would run the light term of all four pixels of a block
-/// even where they take it once a block, and the dense tail as well. Measured on 2-core lavapipe at
-/// 512², the bench's goal scene (`assets/bench-4lobes.brdf.json` on studio, `key` 8 spp; three rounds of alternating
-/// binaries, medians of 7 frames), push constants against specialisation constants: the three
-/// lobes that take their light term once a block 4.6–5.4 → 4.0–4.6, 6.5–7.3 → 5.5–5.8 and 6.1–6.9 → 5.5–6.0 ms; the
-/// same images bit for bit.
+/// even where they take it once a block, and the dense tail as well: those passes of the bench's
+/// goal scene run measurably slower for the same images bit for bit (docs/renderer.md, Alternatives
+/// measured and rejected).
 ///
 /// `Any` holds the code of every output and takes the one the push constants say: the editor's
 /// stand-in while a view's own pipeline is built ([`LobePass::ready`]). Which outputs a lobe takes
@@ -303,6 +302,121 @@ impl Drop for Done {
 }
 
 /// The debug name of a variant's pipeline.
+/// What a lobe pass reads besides its targets: the lights' cones for the reach test, the lights'
+/// texels, the residual map and the light set (stand-ins where the variant reads none: the layout is
+/// the same for every variant).
+struct Reads<'a> {
+    cones: &'a Buffer,
+    texels: &'a crate::vk::Image,
+    residual: &'a crate::vk::Image,
+    lights: LightSet<'a>,
+}
+
+impl<'a> Reads<'a> {
+    fn of(env: &'a GpuEnvironment, variant: Variant, job: &Job<'a>) -> Result<Reads<'a>> {
+        let keys = env.keys.as_ref().filter(|_| variant.lights);
+        if variant.lights && (keys.is_none() || job.light_samples.is_none()) {
+            return Err(crate::Error::Bug("a lobe pass with key lights on a map without any".into()));
+        }
+        let (mut cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
+        // A lobe that sees the key and wide lights as tiles tests its reach to all of them.
+        if variant.wide && variant.reach {
+            cones = keys.and_then(|k| k.wide.as_ref()).and_then(|w| w.cones.as_ref()).ok_or_else(|| {
+                crate::Error::Bug("a wide-light lobe pass tests its reach without the wide lights' cones".into())
+            })?;
+        }
+        if let Some(k) = keys.filter(|_| variant.reach) {
+            let tested = match &k.set.wide {
+                Some(w) if variant.wide => w.all.len(),
+                _ => k.set.lights.len(),
+            };
+            if tested != usize::from(variant.light_slots) {
+                return Err(crate::Error::Bug(format!(
+                    "a lobe pass tests the reach of {} lights of a table of {tested}",
+                    variant.light_slots
+                )));
+            }
+        }
+        let residual = match (variant.key, keys.and_then(|k| k.wide.as_ref()).filter(|_| variant.wide)) {
+            (true, Some(w)) => &w.residual,
+            (true, None) if variant.wide => {
+                return Err(crate::Error::Bug("a wide-light lobe pass on a map without wide lights".into()))
+            }
+            (true, None) => env.residual().0,
+            (false, _) => &env.texture,
+        };
+        // The material's uniform buffer stands in (it is longer than the light set's block).
+        let lights = job.light_samples.filter(|_| variant.lights).unwrap_or(LightSet {
+            buffer: job.material,
+            offset: 0,
+            count: 0,
+            counts: [0.0; 2],
+            ends: None,
+        });
+        Ok(Reads { cones, texels, residual, lights })
+    }
+
+    /// The light set's ends fit the variant: rising light by light to the set's count at the last of
+    /// the reach test's lights (`LightSet::light_ends`' padding), and whole sets of strips for each
+    /// oriented light.
+    fn check(&self, variant: Variant) -> Result<()> {
+        let LightSet { count: m, ends, .. } = self.lights;
+        if variant.reach && variant.points {
+            let slots = usize::from(variant.light_slots);
+            let fits = ends.is_some_and(|e| {
+                e.windows(2).all(|w| w[0] <= w[1])
+                    && e[slots - 1] == m
+                    && e[MAX_LIGHTS - 1] == m
+                    && (slots == 1 || e[slots - 2] < m)
+            });
+            if !fits {
+                return Err(crate::Error::Bug(format!(
+                    "a lobe pass tests its lights' reach with ends {ends:?} for {slots} lights of {m} points"
+                )));
+            }
+        }
+        if variant.oriented > 0 {
+            // Each oriented light's rows are `ORIENTATIONS` sets of as many points.
+            let n = usize::from(variant.oriented);
+            let sets = crate::scene::keylight::strips::ORIENTATIONS as u32;
+            let fits = variant.points
+                && n <= MAX_LIGHTS
+                && ends.is_some_and(|e| (0..n).all(|k| (e[k] - if k == 0 { 0 } else { e[k - 1] }) % sets == 0));
+            if !fits {
+                return Err(crate::Error::Bug(format!(
+                    "a lobe pass runs {n} lights' strips with ends {ends:?} of {m} points"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A lobe pass's push constants: the frame's, with the lobe, its samples, the seed, the light set's
+/// size and sample counts, the lod bias and where the pass writes.
+fn push(mut push: super::gpu::Push, job: &Job<'_>, lights: &LightSet<'_>) -> super::gpu::Push {
+    let cells = matches!(job.into, Into::Cells { .. });
+    // A block's pixel takes at least one vector of 4 samples (fewer cost as much on llvmpipe):
+    // a block of 4 pixels, so 1 sample a pixel on average.
+    let samples = if cells { job.samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { job.samples };
+    push.params = [job.index, samples, job.seed, lights.count];
+    // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
+    // 3 sparse (over the blocks), 4 sparse with the light term at each pixel (a pipeline of one
+    // `Output` reads only 1 against 2; `Output::Any` reads them all).
+    let mode = match job.into {
+        Into::Accum => 0.0,
+        Into::Rough { strata: true } => 1.0,
+        Into::Rough { strata: false } => 2.0,
+        Into::Cells { pixel_lights: false } => 3.0,
+        Into::Cells { pixel_lights: true } => 4.0,
+    };
+    let bias = if job.into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
+    push.fparams = [bias, mode, lights.counts[0], lights.counts[1]];
+    // `lobe.comp` reads the ends from the canvas light's slot, which it has no use for.
+    push.light = lights.ends.unwrap_or([lights.count; MAX_LIGHTS]).map(|e| e as f32);
+    push
+}
+
 fn pipeline_name(v: &Variant) -> String {
     format!("lobe[{}]", v.tag())
 }
@@ -312,7 +426,7 @@ fn build(raw: &ash::Device, cache: ash::vk::PipelineCache, v: &Variant) -> Resul
 }
 
 fn panicked() -> crate::Error {
-    crate::Error::NoDevice("the thread building a lobe pipeline panicked".into())
+    crate::Error::Bug("the thread building a lobe pipeline panicked".into())
 }
 
 impl LobePass {
@@ -380,7 +494,7 @@ impl LobePass {
                 let done = Done { variant, sender, notify };
                 let _ = done.sender.send((variant, build(&raw, cache, &variant)));
             })
-            .map_err(|e| crate::Error::NoDevice(format!("cannot start a thread to build a pipeline: {e}")))?;
+            .map_err(|source| crate::Error::System { what: "cannot start a thread to build a pipeline", source })?;
         self.building.insert(v, thread);
         Ok(())
     }
@@ -415,129 +529,46 @@ impl LobePass {
 
     /// Adds one lobe as `job` says into the image.
     pub fn record(&self, rec: &Recording<'_>, variant: Variant, job: &Job<'_>) -> Result<()> {
-        let Job { index, samples, seed, material, halton, light_samples, into } = *job;
-        if variant.output != Output::Any && variant.output != into.output() {
-            return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} does not write {into:?}")));
+        if variant.output != Output::Any && variant.output != job.into.output() {
+            return Err(crate::Error::Bug(format!("lobe pipeline {variant:?} does not write {:?}", job.into)));
         }
         // The variant's own pipeline, or (the editor's, while that one is built) the one of every output.
         let Some(pipeline) = self.pipelines.get(&variant).or_else(|| self.pipelines.get(&variant.any_output())) else {
-            return Err(crate::Error::Validation(format!("lobe pipeline {variant:?} was not prepared")));
+            return Err(crate::Error::Bug(format!("lobe pipeline {variant:?} was not prepared")));
         };
-        let t = rec.targets;
         let env = rec.env()?;
-        let keys = env.keys.as_ref().filter(|_| variant.lights);
-        if variant.lights && (keys.is_none() || light_samples.is_none()) {
-            return Err(crate::Error::Validation("a lobe pass with key lights on a map without any".into()));
-        }
-        // Stand-ins where the variant reads no key lights (the layout is the same for every variant).
-        let (mut cones, texels) = keys.map_or((&env.sh, &env.texture), |k| (&k.cones, &k.texels));
-        // A lobe that sees the key and wide lights as tiles tests its reach to all of them.
-        if variant.wide && variant.reach {
-            cones = keys.and_then(|k| k.wide.as_ref()).and_then(|w| w.cones.as_ref()).ok_or_else(|| {
-                crate::Error::Validation("a wide-light lobe pass tests its reach without the wide lights' cones".into())
-            })?;
-        }
-        if let Some(k) = keys.filter(|_| variant.reach) {
-            let tested = match &k.set.wide {
-                Some(w) if variant.wide => w.all.len(),
-                _ => k.set.lights.len(),
-            };
-            if tested != usize::from(variant.light_slots) {
-                return Err(crate::Error::Validation(format!(
-                    "a lobe pass tests the reach of {} lights of a table of {tested}",
-                    variant.light_slots
-                )));
-            }
-        }
-        // The material's uniform buffer stands in (it is longer than the light set's block).
-        let LightSet { buffer: samples_buf, offset, count: m, counts, ends } = light_samples
-            .filter(|_| variant.lights)
-            .unwrap_or(LightSet { buffer: material, offset: 0, count: 0, counts: [0.0; 2], ends: None });
-        if variant.reach && variant.points {
-            // The ends rise light by light (each light has a tile) to the set's count at the last of
-            // the test's lights, and stay there (`LightSet::light_ends`' padding).
-            let slots = usize::from(variant.light_slots);
-            let fits = ends.is_some_and(|e| {
-                e.windows(2).all(|w| w[0] <= w[1])
-                    && e[slots - 1] == m
-                    && e[MAX_LIGHTS - 1] == m
-                    && (slots == 1 || e[slots - 2] < m)
-            });
-            if !fits {
-                return Err(crate::Error::Validation(format!(
-                    "a lobe pass tests its lights' reach with ends {ends:?} for {slots} lights of {m} points"
-                )));
-            }
-        }
-        if variant.oriented > 0 {
-            // Each oriented light's rows are `ORIENTATIONS` sets of as many points.
-            let n = usize::from(variant.oriented);
-            let sets = crate::scene::keylight::strips::ORIENTATIONS as u32;
-            let fits = variant.points
-                && n <= MAX_LIGHTS
-                && ends.is_some_and(|e| (0..n).all(|k| (e[k] - if k == 0 { 0 } else { e[k - 1] }) % sets == 0));
-            if !fits {
-                return Err(crate::Error::Validation(format!(
-                    "a lobe pass runs {n} lights' strips with ends {ends:?} of {m} points"
-                )));
-            }
-        }
-        let residual = match (variant.key, keys.and_then(|k| k.wide.as_ref()).filter(|_| variant.wide)) {
-            (true, Some(w)) => &w.residual,
-            (true, None) if variant.wide => {
-                return Err(crate::Error::Validation("a wide-light lobe pass on a map without wide lights".into()))
-            }
-            (true, None) => env.residual().0,
-            (false, _) => &env.texture,
-        };
+        let reads = Reads::of(env, variant, job)?;
+        reads.check(variant)?;
+        let t = rec.targets;
         // A sparse pass runs over the blocks' list, the others over the pixels'.
-        let cells = matches!(into, Into::Cells { .. });
+        let cells = matches!(job.into, Into::Cells { .. });
         let list = if cells { &t.blocks } else { &t.pixels };
         let set = rec.set(
             pipeline,
             &[
-                Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(match into {
-                    Into::Accum => t.accum.view,
-                    Into::Rough { .. } => t.rough.view,
-                    Into::Cells { .. } => t.cells.view,
+                Binding::StorageImageRead(&t.normal),
+                Binding::StorageImage(match job.into {
+                    Into::Accum => &t.accum,
+                    Into::Rough { .. } => &t.rough,
+                    Into::Cells { .. } => &t.cells,
                 }),
                 // `key` reads its residual within the nearest mip level (`environment::KEY_MIPMAP`).
-                Binding::Sampled(residual.view, if variant.key { env.key_sampler } else { env.sampler }),
-                Binding::Storage(material),
-                Binding::Storage(halton),
-                Binding::Sampled(texels.view, env.sampler),
-                Binding::Storage(cones),
-                Binding::Uniform(samples_buf, offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
-                Binding::Storage(list),
+                Binding::Sampled(reads.residual, if variant.key { env.key_sampler } else { env.sampler }),
+                Binding::StorageRead(job.material),
+                Binding::StorageRead(job.halton),
+                Binding::Sampled(reads.texels, env.sampler),
+                Binding::StorageRead(reads.cones),
+                Binding::Uniform(reads.lights.buffer, reads.lights.offset, super::gpu::LIGHT_SET_UNIFORM_BYTES as u64),
+                Binding::StorageRead(list),
                 // A filtered pass's light term (read only by those; a sparse one's a block into
                 // `cells_light`).
-                Binding::StorageImage(match into {
-                    Into::Cells { pixel_lights: false } => t.cells_light.view,
-                    _ => t.accum.view,
+                Binding::StorageImage(match job.into {
+                    Into::Cells { pixel_lights: false } => &t.cells_light,
+                    _ => &t.accum,
                 }),
             ],
         )?;
-        let mut push = rec.push;
-        // A block's pixel takes at least one vector of 4 samples (fewer cost as much on llvmpipe):
-        // a block of 4 pixels, so 1 sample a pixel on average.
-        let samples = if cells { samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { samples };
-        push.params = [index, samples, seed, m];
-        // `lobe.comp`'s fparams.y: 0 unfiltered, 1 filtered, 2 filtered with a hash per pixel always,
-        // 3 sparse (over the blocks), 4 sparse with the light term at each pixel (a pipeline of one
-        // `Output` reads only 1 against 2; `Output::Any` reads them all).
-        let mode = match into {
-            Into::Accum => 0.0,
-            Into::Rough { strata: true } => 1.0,
-            Into::Rough { strata: false } => 2.0,
-            Into::Cells { pixel_lights: false } => 3.0,
-            Into::Cells { pixel_lights: true } => 4.0,
-        };
-        let bias = if into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
-        push.fparams = [bias, mode, counts[0], counts[1]];
-        // `lobe.comp` reads the ends from the canvas light's slot, which it has no use for.
-        push.light = ends.unwrap_or([m; MAX_LIGHTS]).map(|e| e as f32);
-        rec.dispatch_over(list, pipeline, set, &push);
+        rec.dispatch_over(list, pipeline, set, &push(rec.push, job, &reads.lights));
         Ok(())
     }
 

@@ -13,7 +13,7 @@ use crate::Result;
 /// Samples per dispatch.
 pub const CHUNK: u32 = 32;
 
-const BINDINGS: [vk::DescriptorType; 9] = [
+pub(crate) const BINDINGS: [vk::DescriptorType; 9] = [
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::STORAGE_IMAGE,
     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -49,15 +49,15 @@ impl MisPass {
         let set = rec.set(
             &self.pipeline,
             &[
-                Binding::StorageImage(t.normal.view),
-                Binding::StorageImage(t.accum.view),
-                Binding::Sampled(env.texture.view, env.sampler),
+                Binding::StorageImageRead(&t.normal),
+                Binding::StorageImage(&t.accum),
+                Binding::Sampled(&env.texture, env.sampler),
                 Binding::Uniform(material, 0, super::gpu::MATERIAL_UNIFORM_BYTES as u64),
-                Binding::Storage(sequence),
-                Binding::Storage(&env.marginal),
-                Binding::Storage(&env.conditional),
-                Binding::Storage(&env.pdf),
-                Binding::Storage(&t.pixels),
+                Binding::StorageRead(sequence),
+                Binding::StorageRead(&env.marginal),
+                Binding::StorageRead(&env.conditional),
+                Binding::StorageRead(&env.pdf),
+                Binding::StorageRead(&t.pixels),
             ],
         )?;
         let (mut at, end) = (first, first + samples);

@@ -278,7 +278,9 @@ impl Renderer {
         self.begin_frame(material)?;
         // A headless frame builds its pipelines at once (it has no later frame to wait for).
         let background = self.build_in_background.take();
+        let before = self.ctx.counts.now();
         let recorded = self.record_view(material, settings, Progress::Fresh, false);
+        let commands = self.ctx.counts.now().since(before);
         self.build_in_background = background;
         let recorded = recorded.and_then(|_| {
             let (w, h) = (settings.width, settings.height);
@@ -308,14 +310,14 @@ impl Renderer {
         let pixels = readback::pixels(self.readback.as_ref().expect("made above"));
         self.ctx.check_validation()?;
         let image = Image { width: settings.width, height: settings.height, pixels };
-        Ok(Frame { image, timings: times.passes, frame_ms: times.frame_ms })
+        Ok(Frame { image, timings: times.passes, frame_ms: times.frame_ms, commands })
     }
 
     /// Reads the mesh view back as it is shown: the refinement's mean when refining, else its last
     /// frame (waits for the frames in flight; one frame of its own).
     pub fn read_mesh_view(&mut self) -> Result<Image> {
         let Some(t) = self.views[View::Mesh as usize].as_ref() else {
-            return Err(Error::Validation("no mesh view was rendered".into()));
+            return Err(Error::Bug("no mesh view was rendered".into()));
         };
         let (w, h) = (t.width, t.height);
         self.idle()?;

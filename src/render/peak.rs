@@ -17,6 +17,8 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
+/// The pass's descriptor set layout: binding 0 the output.
+pub(crate) const BINDINGS: [vk::DescriptorType; 1] = [vk::DescriptorType::STORAGE_BUFFER];
 /// Rounds per invocation, and flops per round (`peak.comp`: 4 × 8 `vec4` FMAs, 4 lanes, 2 flops).
 const ITERATIONS: u32 = 128;
 const FLOPS_PER_ROUND: f64 = 256.0;
@@ -76,8 +78,7 @@ impl Scratch {
 
 impl PeakPass {
     pub fn new(ctx: &Context) -> Result<PeakPass> {
-        let bindings = [vk::DescriptorType::STORAGE_BUFFER];
-        Ok(PeakPass { pipeline: Pipeline::compute(ctx, crate::spirv!("peak.comp"), "peak", &bindings, 12, &[])? })
+        Ok(PeakPass { pipeline: Pipeline::compute(ctx, crate::spirv!("peak.comp"), "peak", &BINDINGS, 12, &[])? })
     }
 
     /// GFLOP/s: the median of `repeats` runs of the first dispatch that takes at least 20 ms.
@@ -118,6 +119,7 @@ impl PeakPass {
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, set: vk::DescriptorSet, iterations: u32, groups: u32) {
         let push: Vec<u8> = [iterations.to_ne_bytes(), 0.999f32.to_ne_bytes(), 0.001f32.to_ne_bytes()].concat();
         self.pipeline.bind(ctx, cmd, set, &push);
+        ctx.counts.dispatch();
         // SAFETY: `cmd` is recording with the compute pipeline bound.
         unsafe { ctx.raw().cmd_dispatch(cmd, groups.min(ROW), groups.div_ceil(ROW), 1) };
     }
@@ -200,7 +202,7 @@ pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
     pass.destroy(&r.ctx);
     let times = times?;
     if let Some(k) = times.iter().position(|t| t.is_empty()) {
-        return Err(crate::Error::Validation(format!("no GPU time came back for {}", NAMES[k])));
+        return Err(crate::Error::Bug(format!("no GPU time came back for {}", NAMES[k])));
     }
     let median = |mut t: Vec<f64>| {
         t.sort_by(f64::total_cmp);

@@ -2,6 +2,8 @@
 //! made from what the view's targets kept, then its steps in order into the current frame of the
 //! ring, each timed (`steps`); and the compose pass that places both views in the window image.
 
+use std::cell::RefCell;
+
 use ash::vk;
 
 use super::environment::GpuEnvironment;
@@ -14,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::scene::keylight::tiles::TileSet;
 use crate::scene::Camera;
 use crate::vk::descriptor::{self, Binding};
+use crate::vk::hazards::{self, Access, Hazards, Resource};
 use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 
@@ -24,7 +27,8 @@ mod steps;
 const SIZES_KEPT: usize = 3;
 
 /// What a pass records with: the command buffer, this frame's descriptor pool, the shared push
-/// constants, the targets and the environment.
+/// constants, the targets and the environment; and what the view's dispatches have read and
+/// written, from which the barriers between them are derived (`vk::hazards`).
 pub struct Recording<'a> {
     pub ctx: &'a Context,
     pub cmd: vk::CommandBuffer,
@@ -32,48 +36,73 @@ pub struct Recording<'a> {
     pub push: Push,
     pub targets: &'a Targets,
     pub env: Option<&'a GpuEnvironment>,
+    pub hazards: Hazards,
+    /// The accesses of each descriptor set made by [`Self::set`].
+    sets: RefCell<Vec<(vk::DescriptorSet, Vec<Access>)>>,
 }
 
-impl Recording<'_> {
+impl<'a> Recording<'a> {
+    pub fn new(
+        ctx: &'a Context,
+        cmd: vk::CommandBuffer,
+        pool: vk::DescriptorPool,
+        push: Push,
+        targets: &'a Targets,
+        env: Option<&'a GpuEnvironment>,
+    ) -> Recording<'a> {
+        Recording { ctx, cmd, pool, push, targets, env, hazards: Hazards::default(), sets: RefCell::default() }
+    }
+
     pub fn env(&self) -> Result<&GpuEnvironment> {
         self.env.ok_or_else(|| Error::input("render", "a mesh view needs an environment map (--env)"))
     }
 
-    /// A descriptor set of `pipeline`'s layout pointing at `bindings`.
+    /// A descriptor set of `pipeline`'s layout pointing at `bindings`, whose accesses the dispatches
+    /// that bind it are ordered by.
     pub fn set(&self, pipeline: &Pipeline, bindings: &[Binding<'_>]) -> Result<vk::DescriptorSet> {
         let set = descriptor::allocate(self.ctx, self.pool, pipeline.set_layout)?;
         descriptor::write(self.ctx, set, bindings);
+        self.sets.borrow_mut().push((set, hazards::accesses(bindings)));
         Ok(set)
     }
 
-    /// Dispatches 8×8 groups over the image, then orders the accumulation image's writes before the
-    /// next pass's reads and writes.
+    /// The accesses of `set` (made by [`Self::set`]) and, for an indirect dispatch, of its list.
+    fn accesses(&self, set: vk::DescriptorSet, list: Option<&Buffer>) -> Vec<Access> {
+        let sets = self.sets.borrow();
+        let mut a = sets.iter().find(|(s, _)| *s == set).map(|(_, a)| a.clone()).unwrap_or_default();
+        a.extend(list.map(|l| Access { resource: Resource::Buffer(l.raw), write: false, indirect: true }));
+        a
+    }
+
+    /// Dispatches 8×8 groups over the image.
     pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
         let (w, h) = (self.targets.width, self.targets.height);
         self.dispatch_groups(pipeline, set, push, (w.div_ceil(8), h.div_ceil(8)));
     }
 
-    /// Dispatches `groups` workgroups, then orders the accumulation image as [`Self::dispatch`].
+    /// Dispatches `groups` workgroups, after the barrier its conflicts with earlier dispatches need.
     pub fn dispatch_groups(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push, groups: (u32, u32)) {
+        self.hazards.before_dispatch(self.ctx, self.cmd, &self.accesses(set, None));
         pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
+        self.ctx.counts.dispatch();
         // SAFETY: `cmd` is recording with a compute pipeline bound.
         unsafe { self.ctx.raw().cmd_dispatch(self.cmd, groups.0, groups.1, 1) };
-        crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 
     /// Dispatches groups of [`compact::GROUP`] over the targets' list of shaded pixels (as many as
-    /// `compact.comp` wrote into its header), then orders the accumulation image as [`Self::dispatch`].
+    /// `compact.comp` wrote into its header).
     pub fn dispatch_listed(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
         self.dispatch_over(&self.targets.pixels, pipeline, set, push);
     }
 
     /// The same over `list`, the targets' list of pixels or of blocks (`compact.comp` writes both).
     pub fn dispatch_over(&self, list: &Buffer, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+        self.hazards.before_dispatch(self.ctx, self.cmd, &self.accesses(set, Some(list)));
         pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
+        self.ctx.counts.dispatch();
         // SAFETY: `cmd` is recording with a compute pipeline bound; the list buffer has INDIRECT_BUFFER
         // usage and its header, written by the compact pass of this G-buffer, holds the groups.
         unsafe { self.ctx.raw().cmd_dispatch_indirect(self.cmd, list.raw, compact::GROUPS_OFFSET) };
-        crate::vk::barrier::memory(self.ctx, self.cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);
     }
 }
 
@@ -154,7 +183,7 @@ impl Renderer {
         let (Some(mesh), Some(canvas)) =
             (self.views[View::Mesh as usize].as_ref(), self.views[View::Canvas as usize].as_ref())
         else {
-            return Err(Error::Validation("compose before both views were rendered".into()));
+            return Err(Error::Bug("compose before both views were rendered".into()));
         };
         let (image, samples) = if self.refined > 0 { (&mesh.sum, self.refined) } else { (&mesh.accum, 1) };
         let p = compose::Placement {
@@ -239,7 +268,7 @@ impl Renderer {
         self.check_size(settings)?;
         let refine = matches!(progress, Progress::Refine) && settings.view == View::Mesh;
         if refine && settings.estimator != Estimator::Mis {
-            return Err(Error::Validation("refinement frames are mis frames".into()));
+            return Err(Error::Bug("refinement frames are mis frames".into()));
         }
         let mesh_view = settings.view == View::Mesh;
         if mesh_view && (self.env.is_none() || self.mesh.is_none()) {
@@ -353,7 +382,7 @@ impl Renderer {
         // unused fourth component.
         push.forward[3] = backdrop_lod(settings.backdrop_blur);
         let targets = self.views[settings.view as usize].as_ref().expect("made by targets_for");
-        let rec = Recording { ctx, cmd, pool, push, targets, env: self.env.as_ref() };
+        let rec = Recording::new(ctx, cmd, pool, push, targets, self.env.as_ref());
         let steps = steps::StepRecorder {
             rec,
             passes: self.passes.as_ref().expect("passes live until drop"),
@@ -369,6 +398,9 @@ impl Renderer {
             spp: settings.spp,
             seed: self.seed,
         };
-        steps.record(ts, plan)
+        let recorded = steps.record(ts, plan);
+        // What the view's last dispatches wrote, for whatever the frame records next.
+        steps.rec.hazards.flush(ctx, cmd);
+        recorded
     }
 }

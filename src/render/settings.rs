@@ -119,6 +119,9 @@ pub struct Frame {
     pub image: Image,
     pub timings: Vec<PassTime>,
     pub frame_ms: f64,
+    /// The pipeline barriers and dispatches the frame's passes recorded (the readback's copy not
+    /// included).
+    pub commands: crate::vk::counts::Counted,
 }
 
 impl Frame {

@@ -62,55 +62,8 @@ pub type BaseKey = ((String, usize, usize, u64), bool, [u64; 3], u32);
 
 impl Targets {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Targets> {
-        let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
         let mut made: Vec<Image> = Vec::new();
-        let built = (|| -> Result<[Buffer; 3]> {
-            made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
-            made.push(Image::new(
-                ctx,
-                (width, height),
-                DEPTH_FORMAT,
-                1,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-                "gbuffer.depth",
-            )?);
-            // The shading images: RGBA32F storage images with `usage` besides.
-            let rgba = |usage: vk::ImageUsageFlags, name: &str| {
-                let usage = vk::ImageUsageFlags::STORAGE | usage;
-                Image::new(ctx, (width, height), vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
-            };
-            let (src, dst) = (vk::ImageUsageFlags::TRANSFER_SRC, vk::ImageUsageFlags::TRANSFER_DST);
-            made.push(rgba(src | dst, "accum")?);
-            made.push(rgba(src | dst, "accum.base")?);
-            made.push(rgba(src, "refinement.sum")?);
-            made.push(rgba(dst, "rough")?);
-            made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
-            let half = (width.div_ceil(2), height.div_ceil(2));
-            // A sparse frame's images: one texel a 2 × 2 block, cleared each frame.
-            let cells = |name: &str| {
-                let usage = vk::ImageUsageFlags::STORAGE | dst;
-                Image::new(ctx, half, vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
-            };
-            made.push(cells("rough.cells")?);
-            made.push(cells("rough.cells_light")?);
-            let mut lists = Vec::new();
-            let entries = [u64::from(width) * u64::from(height), u64::from(half.0) * u64::from(half.1)];
-            for (name, entries) in [("pixels", entries[0]), ("blocks", entries[1]), ("background.blocks", entries[1])] {
-                match super::compact::list_buffer(ctx, entries, name) {
-                    Ok(list) => lists.push(list),
-                    Err(e) => {
-                        for list in lists {
-                            list.destroy(ctx);
-                        }
-                        return Err(e);
-                    }
-                }
-            }
-            match <[Buffer; 3]>::try_from(lists) {
-                Ok(lists) => Ok(lists),
-                Err(_) => unreachable!("three lists made above"),
-            }
-        })();
+        let built = images(ctx, width, height, &mut made).and_then(|()| lists(ctx, width, height));
         let [pixels, blocks, background_blocks] = match built {
             Ok(b) => b,
             Err(e) => {
@@ -186,5 +139,56 @@ impl Targets {
         self.pixels.destroy(ctx);
         self.blocks.destroy(ctx);
         self.background_blocks.destroy(ctx);
+    }
+}
+
+/// The view's nine images, in the order of [`Targets`]' fields, pushed onto `made` as they are made
+/// (so that the caller frees them if a later one fails).
+fn images(ctx: &Context, width: u32, height: u32, made: &mut Vec<Image>) -> Result<()> {
+    let gbuf = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE;
+    made.push(Image::new(ctx, (width, height), GBUFFER_FORMAT, 1, gbuf, "gbuffer.normal")?);
+    let depth = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
+    made.push(Image::new(ctx, (width, height), DEPTH_FORMAT, 1, depth, "gbuffer.depth")?);
+    // The shading images: RGBA32F storage images with `usage` besides.
+    let rgba = |usage: vk::ImageUsageFlags, name: &str| {
+        let usage = vk::ImageUsageFlags::STORAGE | usage;
+        Image::new(ctx, (width, height), vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
+    };
+    let (src, dst) = (vk::ImageUsageFlags::TRANSFER_SRC, vk::ImageUsageFlags::TRANSFER_DST);
+    made.push(rgba(src | dst, "accum")?);
+    made.push(rgba(src | dst, "accum.base")?);
+    made.push(rgba(src, "refinement.sum")?);
+    made.push(rgba(dst, "rough")?);
+    made.push(rgba(vk::ImageUsageFlags::empty(), "rough.mid")?);
+    // A sparse frame's images: one texel a 2 × 2 block, cleared each frame.
+    let half = (width.div_ceil(2), height.div_ceil(2));
+    let cells = |name: &str| {
+        let usage = vk::ImageUsageFlags::STORAGE | dst;
+        Image::new(ctx, half, vk::Format::R32G32B32A32_SFLOAT, 1, usage, name)
+    };
+    made.push(cells("rough.cells")?);
+    made.push(cells("rough.cells_light")?);
+    Ok(())
+}
+
+/// The lists of shaded pixels, of blocks, and of blocks with a pixel off the object.
+fn lists(ctx: &Context, width: u32, height: u32) -> Result<[Buffer; 3]> {
+    let mut lists = Vec::new();
+    let pixels = u64::from(width) * u64::from(height);
+    let blocks = u64::from(width.div_ceil(2)) * u64::from(height.div_ceil(2));
+    for (name, entries) in [("pixels", pixels), ("blocks", blocks), ("background.blocks", blocks)] {
+        match super::compact::list_buffer(ctx, entries, name) {
+            Ok(list) => lists.push(list),
+            Err(e) => {
+                for list in lists {
+                    list.destroy(ctx);
+                }
+                return Err(e);
+            }
+        }
+    }
+    match <[Buffer; 3]>::try_from(lists) {
+        Ok(lists) => Ok(lists),
+        Err(_) => unreachable!("three lists made above"),
     }
 }

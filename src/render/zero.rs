@@ -1,5 +1,5 @@
 //! The zero pass: zeroes the images the lobe passes add into (the sparse filter's cells and their
-//! lights, or the rough lobes' image) with a compute dispatch, where the frame plan
+//! lights, or the rough lobes' image) with a compute dispatch, where the device plan
 //! ([`super::plan::DevicePlan::zero_by_compute`]) prefers it to a transfer clear.
 
 use ash::vk;
@@ -9,7 +9,8 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context, Image};
 use crate::Result;
 
-const BINDINGS: [vk::DescriptorType; 2] = [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
+pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
+    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
 
 pub struct ZeroPass {
     pipeline: Pipeline,
@@ -32,17 +33,18 @@ impl ZeroPass {
         let (first, second) = match images {
             [a] => (*a, None),
             [a, b] => (*a, Some(*b)),
-            _ => return Err(crate::Error::Validation("the zero pass takes one or two images".into())),
+            _ => return Err(crate::Error::Bug("the zero pass takes one or two images".into())),
         };
         for i in images {
             i.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         }
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        let view = |i: &Image| Binding::StorageImage(i.view);
+        let view = |i| Binding::StorageImage(i);
         descriptor::write(ctx, set, &[view(first), view(second.unwrap_or(first))]);
         let (w, h) = (first.width, first.height);
         let push = [w, h, u32::from(second.is_some()), 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
+        ctx.counts.dispatch();
         // SAFETY: `cmd` is recording with the compute pipeline bound.
         unsafe { ctx.raw().cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1) };
         barrier::memory(ctx, cmd, barrier::COMPUTE_WRITE, barrier::COMPUTE_READ_WRITE);

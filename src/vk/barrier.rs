@@ -78,6 +78,7 @@ pub fn image(
     dst: Scope,
 ) {
     let b = [transition(image, range, layouts, src, dst)];
+    ctx.counts.barrier();
     // SAFETY: `cmd` is recording; the image is live (the caller's).
     unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
 }
@@ -94,6 +95,7 @@ pub fn memory(ctx: &Context, cmd: vk::CommandBuffer, src: Scope, dst: Scope) {
         .src_access_mask(src.1)
         .dst_stage_mask(dst.0)
         .dst_access_mask(dst.1)];
+    ctx.counts.barrier();
     // SAFETY: `cmd` is recording.
     unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&b)) };
 }
@@ -109,6 +111,49 @@ pub fn to_host(ctx: &Context, cmd: vk::CommandBuffer, buffer: vk::Buffer) {
         .dst_access_mask(vk::AccessFlags2::HOST_READ)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)];
+    ctx.counts.barrier();
     // SAFETY: `cmd` is recording; the buffer is live (the caller's).
     unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().buffer_memory_barriers(&b)) };
+}
+
+/// One barrier ordering each `(resource, src)` before `dst`: an image barrier (`GENERAL` kept, every
+/// level and layer) per image, a buffer barrier (the whole buffer) per buffer.
+pub fn resources(ctx: &Context, cmd: vk::CommandBuffer, list: &[(super::hazards::Resource, Scope)], dst: Scope) {
+    use super::hazards::Resource;
+    let all = vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: vk::REMAINING_MIP_LEVELS,
+        base_array_layer: 0,
+        layer_count: vk::REMAINING_ARRAY_LAYERS,
+    };
+    let general = (vk::ImageLayout::GENERAL, vk::ImageLayout::GENERAL);
+    let images: Vec<vk::ImageMemoryBarrier2> = list
+        .iter()
+        .filter_map(|&(r, src)| match r {
+            Resource::Image(image) => Some(transition(image, all, general, src, dst)),
+            Resource::Buffer(_) => None,
+        })
+        .collect();
+    let buffers: Vec<vk::BufferMemoryBarrier2> = list
+        .iter()
+        .filter_map(|&(r, src)| match r {
+            Resource::Buffer(buffer) => Some(
+                vk::BufferMemoryBarrier2::default()
+                    .buffer(buffer)
+                    .size(vk::WHOLE_SIZE)
+                    .src_stage_mask(src.0)
+                    .src_access_mask(src.1)
+                    .dst_stage_mask(dst.0)
+                    .dst_access_mask(dst.1)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED),
+            ),
+            Resource::Image(_) => None,
+        })
+        .collect();
+    ctx.counts.barrier();
+    let info = vk::DependencyInfo::default().image_memory_barriers(&images).buffer_memory_barriers(&buffers);
+    // SAFETY: `cmd` is recording; every image and buffer is live (the caller's), images in `GENERAL`.
+    unsafe { ctx.raw().cmd_pipeline_barrier2(cmd, &info) };
 }

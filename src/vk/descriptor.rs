@@ -3,7 +3,7 @@
 
 use ash::vk;
 
-use super::{vk_err, Buffer, Context};
+use super::{vk_err, Buffer, Context, Image};
 use crate::error::Result;
 
 /// A set layout with bindings `0..types.len()` of the given types, visible to `stages`.
@@ -64,14 +64,22 @@ pub fn allocate(ctx: &Context, pool: vk::DescriptorPool, layout: vk::DescriptorS
     Ok(sets[0])
 }
 
-/// What one binding points at.
+/// What one binding points at, and whether the shader may write it (what `vk::hazards` orders
+/// later dispatches after).
 pub enum Binding<'a> {
+    /// A storage buffer the shader may write.
     Storage(&'a Buffer),
+    /// A storage buffer the shader only reads (`readonly` in GLSL).
+    StorageRead(&'a Buffer),
     /// `range` bytes of a uniform buffer from `offset` (a multiple of the device's
     /// `minUniformBufferOffsetAlignment`; `range` at most its `maxUniformBufferRange`).
     Uniform(&'a Buffer, u64, u64),
-    StorageImage(vk::ImageView),
-    Sampled(vk::ImageView, vk::Sampler),
+    /// A storage image (`GENERAL`) the shader may write.
+    StorageImage(&'a Image),
+    /// A storage image (`GENERAL`) the shader only reads.
+    StorageImageRead(&'a Image),
+    /// An image sampled through `sampler` (`SHADER_READ_ONLY_OPTIMAL`).
+    Sampled(&'a Image, vk::Sampler),
 }
 
 /// Points bindings `0..bindings.len()` of `set` at the given resources.
@@ -79,7 +87,7 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
     let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
         .iter()
         .map(|b| match b {
-            Binding::Storage(buf) => [buf.descriptor()],
+            Binding::Storage(buf) | Binding::StorageRead(buf) => [buf.descriptor()],
             Binding::Uniform(buf, offset, range) => [buf.descriptor().offset(*offset).range(*range)],
             _ => [vk::DescriptorBufferInfo::default()],
         })
@@ -87,11 +95,11 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
     let images: Vec<[vk::DescriptorImageInfo; 1]> = bindings
         .iter()
         .map(|b| match *b {
-            Binding::StorageImage(view) => {
-                [vk::DescriptorImageInfo::default().image_view(view).image_layout(vk::ImageLayout::GENERAL)]
+            Binding::StorageImage(im) | Binding::StorageImageRead(im) => {
+                [vk::DescriptorImageInfo::default().image_view(im.view).image_layout(vk::ImageLayout::GENERAL)]
             }
-            Binding::Sampled(view, sampler) => [vk::DescriptorImageInfo::default()
-                .image_view(view)
+            Binding::Sampled(im, sampler) => [vk::DescriptorImageInfo::default()
+                .image_view(im.view)
                 .sampler(sampler)
                 .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
             _ => [vk::DescriptorImageInfo::default()],
@@ -104,8 +112,10 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
             let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32);
             let w = w.descriptor_type(b.ty());
             match b {
-                Binding::Storage(_) | Binding::Uniform(..) => w.buffer_info(&buffers[i]),
-                Binding::StorageImage(_) | Binding::Sampled(..) => w.image_info(&images[i]),
+                Binding::Storage(_) | Binding::StorageRead(_) | Binding::Uniform(..) => w.buffer_info(&buffers[i]),
+                Binding::StorageImage(_) | Binding::StorageImageRead(_) | Binding::Sampled(..) => {
+                    w.image_info(&images[i])
+                }
             }
         })
         .collect();
@@ -116,9 +126,9 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
 impl Binding<'_> {
     pub fn ty(&self) -> vk::DescriptorType {
         match self {
-            Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Binding::Storage(_) | Binding::StorageRead(_) => vk::DescriptorType::STORAGE_BUFFER,
             Binding::Uniform(..) => vk::DescriptorType::UNIFORM_BUFFER,
-            Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Binding::StorageImage(_) | Binding::StorageImageRead(_) => vk::DescriptorType::STORAGE_IMAGE,
             Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         }
     }

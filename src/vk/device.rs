@@ -19,7 +19,7 @@ pub struct Device {
     pub timestamp_period: f32,
     pub timestamp_valid_bits: u32,
     pub limits: vk::PhysicalDeviceLimits,
-    /// What `bench` names the device by and what the frame plan (`render::plan`) and the pipeline
+    /// What `bench` names the device by and what the device plan (`render::plan::DevicePlan`) and the pipeline
     /// cache's header read.
     pub info: DeviceInfo,
     debug_utils: ash::ext::debug_utils::Device,

@@ -197,7 +197,7 @@ impl FrameRing {
     /// That earlier frame's GPU times join the finished ones.
     pub fn begin(&mut self, ctx: &Context, sets: u32, passes: u32, time_passes: bool) -> Result<()> {
         if self.recording {
-            return Err(crate::Error::NoDevice("a frame was begun twice".into()));
+            return Err(crate::Error::Bug("a frame was begun twice".into()));
         }
         self.current = (self.current + 1) % self.frames.len();
         self.settle(ctx, self.current)?;

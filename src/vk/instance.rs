@@ -1,5 +1,6 @@
 //! The Vulkan instance and the debug-utils messenger that collects validation ERROR messages (every
-//! GPU test asserts the list is empty). Owns the loader entry; nothing else.
+//! GPU test asserts the list is empty), synchronization validation's hazards among them. Owns the
+//! loader entry; nothing else.
 
 use std::ffi::{c_void, CStr};
 use std::sync::Mutex;
@@ -64,11 +65,21 @@ impl Instance {
             .api_version(vk::API_VERSION_1_3);
         let layers = if validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
         let mut extensions = vec![ash::ext::debug_utils::NAME.as_ptr()];
+        if validation {
+            extensions.push(ash::ext::validation_features::NAME.as_ptr());
+        }
         extensions.extend_from_slice(extra);
-        let info = vk::InstanceCreateInfo::default()
+        // With the layer, synchronization validation too: a missing or wrong barrier between two
+        // commands (a read after a write, a write after a read or a write) is an error like any other.
+        let features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut validation_features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&features);
+        let mut info = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
+        if validation {
+            info = info.push_next(&mut validation_features);
+        }
         // SAFETY: `info` and everything it points to outlive the call.
         let raw = unsafe { entry.create_instance(&info, None) }.map_err(|result| match result {
             vk::Result::ERROR_LAYER_NOT_PRESENT => {

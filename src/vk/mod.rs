@@ -8,15 +8,18 @@
 pub mod barrier;
 pub mod buffer;
 pub mod commands;
+pub mod counts;
 pub mod descriptor;
 pub mod device;
 pub mod frame;
+pub mod hazards;
 pub mod image;
 pub mod instance;
 pub mod pipeline;
 pub mod pipeline_cache;
 pub mod query;
 pub mod readback;
+pub mod reflect;
 pub mod shader;
 pub mod surface;
 pub mod swapchain;
@@ -66,6 +69,8 @@ pub struct Context {
     pub pipeline_cache: ManuallyDrop<pipeline_cache::PipelineCache>,
     pub device: Device,
     pub instance: Instance,
+    /// The barriers and dispatches recorded so far.
+    pub counts: counts::CommandCounts,
 }
 
 impl Context {
@@ -101,6 +106,7 @@ impl Context {
             pipeline_cache: ManuallyDrop::new(pipeline_cache),
             device,
             instance,
+            counts: counts::CommandCounts::default(),
         })
     }
 

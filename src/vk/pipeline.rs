@@ -1,10 +1,11 @@
 //! Pipelines with their layout and their one descriptor set layout: compute pipelines with
 //! specialisation constants (ids `0..n`, all `u32`), and the rasterising pipeline of the G-buffer
-//! (dynamic rendering, no render-pass objects).
+//! (dynamic rendering, no render-pass objects). Each is made only once its declared bindings are
+//! checked against its shaders' ([`reflect::check_layout`]).
 
 use ash::vk;
 
-use super::{descriptor, shader, vk_err, Context};
+use super::{descriptor, reflect, shader, vk_err, Context};
 use crate::error::Result;
 
 pub struct Pipeline {
@@ -57,7 +58,9 @@ fn finish(
 }
 
 impl Pipeline {
-    /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`.
+    /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`, with binding `i`
+    /// of its one set of type `bindings[i]` (checked against the shader's bindings: an error names
+    /// any mismatch).
     pub fn compute(
         ctx: &Context,
         spv: &[u8],
@@ -110,6 +113,7 @@ impl Pipeline {
         push_size: u32,
         spec: &[u32],
     ) -> Result<Pipeline> {
+        reflect::check_layout(name, &[spv], bindings)?;
         let stages = vk::ShaderStageFlags::COMPUTE;
         let module = shader::module_on(raw, spv, name)?;
         let (set_layout, layout) = match layouts(raw, bindings, stages, push_size) {
@@ -167,6 +171,7 @@ impl Pipeline {
         colors: &[vk::Format],
         depth: vk::Format,
     ) -> Result<Pipeline> {
+        reflect::check_layout(name, &[vert, frag], bindings)?;
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let vs = shader::module(ctx, vert, &format!("{name}.vert"))?;
         let fs = match shader::module(ctx, frag, &format!("{name}.frag")) {

@@ -409,7 +409,7 @@ fn the_any_output_stand_in_draws_what_the_views_own_pipelines_draw() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// The GPU frame plan (`render::plan::DevicePlan::GPU`: the compact pass starts every pixel, the
+/// The GPU device plan (`render::plan::DevicePlan::GPU`: the compact pass starts every pixel, the
 /// filter's images zeroed by a compute pass, a kept G-buffer's background and diffuse image drawn
 /// again instead of copied), forced on lavapipe, draws the CPU plan's images. Frames that keep the
 /// G-buffer match bit for bit (both plans draw the kept image in the compact pass, or copy what it

@@ -1,4 +1,4 @@
-//! The frame plan: how a frame starts and zeroes its images on this kind of device, a pure function
+//! The device plan: how a frame starts and zeroes its images on this kind of device, a pure function
 //! of the device's type (tested without a device). Every choice draws the same image (within the
 //! rounding of a different order of additions); they differ in where the bytes go.
 //!

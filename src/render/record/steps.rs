@@ -37,7 +37,7 @@ pub struct StepRecorder<'a> {
 }
 
 fn missing(what: &str) -> Error {
-    Error::Validation(format!("the frame's plan needs {what}, which the renderer did not make"))
+    Error::Bug(format!("the frame's plan needs {what}, which the renderer did not make"))
 }
 
 impl StepRecorder<'_> {
@@ -102,7 +102,11 @@ impl StepRecorder<'_> {
                 let seq = self.sequence.ok_or_else(|| missing("the mis sequence"))?;
                 p.mis.record(rec, *offset, *samples, self.material, seq)
             }
-            Pass::Accumulate { first, samples } => p.accumulate.record(ctx, cmd, pool, targets, *first, *samples),
+            Pass::Accumulate { first, samples } => {
+                // The accumulate pass reads the frame's image outside the view's derived barriers.
+                rec.hazards.flush(ctx, cmd);
+                p.accumulate.record(ctx, cmd, pool, targets, *first, *samples)
+            }
         }
     }
 

@@ -2,7 +2,7 @@
 //!
 //! A lobe wider than a light sees it as the light's four quadrature points
 //! ([`super::quadrature_fits`]). A narrower lobe resolves the light's shape, and its light samples
-//! (MIS) are what leaves studio's lamp 10–14 % off at 8 spp. Here the light is cut into tiles
+//! (MIS) are what leaves studio's lamp noisy at 8 spp. Here the light is cut into tiles
 //! instead, each seen as its own four points (the same quadrature, exact to second order within the
 //! tile), fine where the light's weight is and coarse where it is faint.
 //!
@@ -37,26 +37,26 @@ use super::{quadrature, Environment, KeyLight, QUADRATURE_RATIO};
 /// `(cos²φ/αx² + sin²φ/αy²)²`; over `φ` its mean is `(3/αx⁴ + 2/(αx² αy²) + 3/αy⁴) / 8` (`E cos⁴ =
 /// E sin⁴ = 3/8`, `E cos² sin² = 1/8`), `1/α⁴` for a round lobe. Along the narrow axis the weight is
 /// `1/αx⁴`, at most 8/3 of the mean, so the tiles' bound ([`TILE_BUDGET`]) holds on average over the
-/// orientations and within 8/3 of it at the worst (`tests/keylight.rs`: at most 3.8 % of the largest
-/// value over eight orientations of three lobes on four maps, against 22 % for tiles at the geometric
-/// mean `√(αx αy)`, which ignores the narrow axis). The lobe's smaller `α` instead, the bound at every
-/// orientation, takes 44 points for studio's lamp where this takes 28 (the sweep's Ward 0.05 × 0.3
-/// lobe).
+/// orientations and within 8/3 of it at the worst (`tests/keylight.rs` checks eight orientations of
+/// three lobes on four maps; tiles at the geometric mean `√(αx αy)`, which ignores the narrow axis,
+/// err several times more: docs/renderer.md, Alternatives measured and rejected). The lobe's
+/// smaller `α` instead, the bound at every orientation, takes 44 points for studio's lamp where
+/// this takes 28 (the sweep's Ward 0.05 × 0.3 lobe).
 pub fn tile_alpha(alpha_x: f64, alpha_y: f64) -> f64 {
     let (a2, b2) = (alpha_x * alpha_x, alpha_y * alpha_y);
     (8.0 / (3.0 / (a2 * a2) + 2.0 / (a2 * b2) + 3.0 / (b2 * b2))).powf(0.25)
 }
 
 /// The most points a lobe's tiles may take where every shaded pixel evaluates them all (no reach
-/// test, see [`max_points`]): a point costs about a seventh of a BRDF sample on lavapipe (512²,
-/// studio: an anisotropic lobe's 132 points took its pass from 28 to 59–79 ms, a 44-point lobe's
-/// stayed at 21–27 ms with the reach test), so a lobe that needs more keeps MIS.
+/// test, see [`max_points`]): every shaded pixel pays for every point, and past this many they cost
+/// a lobe pass more on lavapipe than the MIS light samples they replace (docs/renderer.md,
+/// Alternatives measured and rejected), so a lobe that needs more keeps MIS.
 pub const MAX_TILE_POINTS: usize = 64;
 
 /// The most points the lobe pass's uniform block holds (`render::gpu::LIGHT_SET_MAX`). Room for a
 /// sharp lobe's tiles: studio's lamp as tiles for a lobe of α 0.02 takes 768 points at a
-/// [`TILE_BUDGET`] of ½ (212 at 8), and that lobe's 8-spp error on the 64² sweep is 0.022 as tiles
-/// against 0.104 by MIS light samples (the mean of 4 frames' seeds).
+/// [`TILE_BUDGET`] of ½ (212 at 8), and as tiles that lobe's 8-spp error on studio is far below its
+/// error with MIS light samples.
 pub const MAX_BLOCK_POINTS: usize = 1024;
 
 /// The most points a lobe's tiles may take. Without the per-pixel reach test every shaded pixel
@@ -86,13 +86,14 @@ pub fn max_points(lights: &[KeyLight], reach: Option<(f64, f64)>) -> usize {
 
 /// The tiles' moments sum to at most this multiple of the whole light's bound `|W| (r α)⁴`: the bias
 /// a lobe's tiles may leave, against the cost of their points. 8: the
-/// bound of a whole light seen as one tile's four points at spread `s ≤ 8^¼ r α = 0.76 α`, where the
-/// four points measured 4.9 % of the largest value at `s = 0.8 α` (`QUADRATURE_RATIO`'s table), so
-/// the tiles' bias stays within 5 % of the largest value (`tests/keylight.rs`; measured worst 3.7 %,
-/// against 0.8 % at ½). What it buys against ½, measured on the 64² sweep (2-core lavapipe): studio's lamp for a
-/// Ward lobe of α 0.02 in 212 points instead of 768 (its 1-spp frame 0.76 → 0.39 ms, its 8-spp
-/// error 0.0155 → 0.0157, 256 spp 0.0058 → 0.0060), and a Ward 0.05 × 0.3 lobe on studio sees the lamp
-/// as 44 points instead of MIS light samples (8 spp: 0.138 → 0.081). The light term of a frame is
+/// bound of a whole light seen as one tile's four points at spread `s ≤ 8^¼ r α = 0.76 α`, just
+/// inside `s = 0.8 α`, where the four points still keep within 5 % of the largest value (the
+/// whole light's points at that [`QUADRATURE_RATIO`], docs/renderer.md, Alternatives measured and
+/// rejected), so the tiles' bias stays within 5 % of the largest value (`tests/keylight.rs` checks
+/// it). Against a budget of ½, studio's lamp for a Ward lobe of α 0.02
+/// is 212 points instead of 768, its frames cost much less for the same error, and a Ward
+/// 0.05 × 0.3 lobe on studio sees the lamp as 44 points instead of MIS light samples, more
+/// accurately (docs/renderer.md, Alternatives measured and rejected). The light term of a frame is
 /// this biased whatever its samples; the refinement frames (MIS) are not.
 pub const TILE_BUDGET: f64 = 8.0;
 

@@ -72,8 +72,8 @@ impl Mesh {
     /// The same worst sag as the 256 × 128 UV sphere (`Mesh::uv_sphere`, 65,024 triangles), whose
     /// rings near the poles hold 256 segments each, far shorter than the equator's; on llvmpipe a
     /// G-buffer pass costs about a triangle's setup and its pixels' blocks per triangle drawn, so the
-    /// fewer triangles pay (2-core lavapipe, 512², the same 191,132 pixels covered: the diffuse-only
-    /// frame's G-buffer pass 12.0–13.2 → 10.9–11.3 ms, the goal frame's 11.7–12.5 → 10.5–11.0).
+    /// fewer triangles rasterise the same pixels faster (docs/renderer.md, Alternatives measured and
+    /// rejected).
     pub fn sphere() -> Mesh {
         let (seg, rings) = (256u32, 128u32);
         let mut positions = Vec::new();

@@ -1,0 +1,215 @@
+//! Reflection on the shaders compiled into the crate and on small modules assembled here, and the
+//! layout check on every pass's declaration: no device needed.
+
+use ash::vk;
+use spirv::{Decoration, Dim, Op, StorageClass};
+
+use super::{check_layout, reflect, ShaderBinding};
+use crate::render;
+
+/// A pipeline's name, its shader modules and its declared layout.
+type Declared = (&'static str, Vec<&'static [u8]>, &'static [vk::DescriptorType]);
+
+/// An instruction of a module assembled here: its opcode and its operands.
+type Instruction = (Op, Vec<u32>);
+
+/// Every pipeline the renderer makes.
+fn pipelines() -> Vec<Declared> {
+    vec![
+        ("accumulate", vec![crate::spirv!("accumulate.comp")], &render::accumulate::BINDINGS),
+        ("background", vec![crate::spirv!("background.comp")], &render::background::BINDINGS),
+        ("canvas", vec![crate::spirv!("canvas.comp")], &render::canvas::BINDINGS),
+        ("compact", vec![crate::spirv!("compact.comp")], &render::compact::BINDINGS),
+        ("compose", vec![crate::spirv!("compose.comp")], &render::compose::BINDINGS),
+        ("denoise", vec![crate::spirv!("denoise.comp")], &render::denoise::BINDINGS),
+        ("denoise-sparse", vec![crate::spirv!("denoise_sparse.comp")], &render::denoise::SPARSE_BINDINGS),
+        ("diffuse", vec![crate::spirv!("diffuse.comp")], &render::diffuse::BINDINGS),
+        ("eval", vec![crate::spirv!("eval.comp")], &render::eval::BINDINGS),
+        ("gbuffer", vec![crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")], &render::gbuffer::BINDINGS),
+        ("lobe", vec![crate::spirv!("lobe.comp")], &render::lobe::BINDINGS),
+        ("mis", vec![crate::spirv!("mis.comp")], &render::mis::BINDINGS),
+        ("peak", vec![crate::spirv!("peak.comp")], &render::peak::BINDINGS),
+        ("zero", vec![crate::spirv!("zero.comp")], &render::zero::BINDINGS),
+    ]
+}
+
+#[test]
+fn every_pass_declares_its_shaders_bindings() {
+    for (name, modules, declared) in pipelines() {
+        if let Err(e) = check_layout(name, &modules, declared) {
+            panic!("{e}");
+        }
+        let found: usize = modules.iter().map(|m| reflect(m).unwrap().bindings.len()).sum();
+        // The G-buffer pass reads nothing through descriptors; every compute pass does.
+        assert_eq!(found == 0, declared.is_empty(), "{name}: {found} bindings in the shader");
+    }
+}
+
+#[test]
+fn reflection_names_the_shader_file_and_its_variables() {
+    let r = reflect(crate::spirv!("compact.comp")).unwrap();
+    assert_eq!(r.source.as_deref(), Some("compact.comp"));
+    let env = &r.bindings[4];
+    assert_eq!((env.set, env.binding, env.ty, env.count), (0, 4, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 1));
+    assert_eq!(env.name, "env_tex");
+    let numbers: Vec<u32> = r.bindings.iter().map(|b| b.binding).collect();
+    assert_eq!(numbers, (0..8).collect::<Vec<_>>());
+}
+
+#[test]
+fn lobe_keeps_the_bindings_only_a_specialisation_reads() {
+    // `light_set` (binding 7, a uniform block) is read only with LIGHTS on, a specialisation
+    // constant; the optimiser cannot know it and keeps it.
+    let r = reflect(crate::spirv!("lobe.comp")).unwrap();
+    let light_set = r.bindings.iter().find(|b| b.binding == 7).expect("binding 7");
+    assert_eq!(light_set.ty, vk::DescriptorType::UNIFORM_BUFFER);
+}
+
+#[test]
+fn a_swapped_type_is_reported_with_shader_and_binding() {
+    let mut wrong = render::compact::BINDINGS;
+    wrong.swap(3, 4);
+    let e = check_layout("compact-test", &[crate::spirv!("compact.comp")], &wrong).unwrap_err().to_string();
+    assert!(e.contains("pipeline `compact-test`"), "{e}");
+    assert!(
+        e.contains(
+            "shader compact.comp, binding 3 (`accum`): declared COMBINED_IMAGE_SAMPLER, the shader has STORAGE_IMAGE"
+        ),
+        "{e}"
+    );
+    assert!(
+        e.contains(
+            "shader compact.comp, binding 4 (`env_tex`): declared STORAGE_IMAGE, the shader has COMBINED_IMAGE_SAMPLER"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_missing_binding_is_reported_with_shader_and_binding() {
+    let declared = &render::lobe::BINDINGS[..9];
+    let e = check_layout("lobe-test", &[crate::spirv!("lobe.comp")], declared).unwrap_err().to_string();
+    assert!(
+        e.contains("shader lobe.comp, binding 9 (`direct`): the shader has STORAGE_IMAGE, the layout declares none"),
+        "{e}"
+    );
+    assert!(!e.contains("binding 8"), "{e}");
+}
+
+#[test]
+fn a_graphics_pipeline_checks_each_stage() {
+    let modules: [&[u8]; 2] = [crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")];
+    let sampler = module(StorageClass::UniformConstant, 1, 0, 5, &[(Op::TypeSampler, vec![5])]);
+    check_layout("gbuffer-test", &modules, &[]).unwrap();
+    let e = check_layout("gbuffer-test", &[modules[0], &sampler], &[]).unwrap_err().to_string();
+    assert!(e.contains("shader gbuffer-test, binding 0: in set 1, the layout has set 0 alone"), "{e}");
+}
+
+#[test]
+fn declared_bindings_the_shader_lacks_are_allowed() {
+    let mut more = render::eval::BINDINGS.to_vec();
+    more.push(vk::DescriptorType::UNIFORM_BUFFER);
+    check_layout("eval-test", &[crate::spirv!("eval.comp")], &more).unwrap();
+}
+
+#[test]
+fn malformed_modules_are_errors() {
+    let good = crate::spirv!("zero.comp");
+    // The header and the first word of `OpCapability`, which says it has two.
+    assert!(reflect(&good[..24]).is_err(), "cut short");
+    assert!(reflect(&good[..good.len() - 2]).is_err(), "not whole words");
+    assert!(reflect(&good[4..]).is_err(), "no magic number");
+    assert!(reflect(&good[..12]).is_err(), "shorter than the header");
+    let mut zero_count = good[..20].to_vec();
+    zero_count.extend_from_slice(&[0, 0, 0, 0]);
+    assert!(reflect(&zero_count).is_err(), "an instruction of no words");
+    let e = check_layout("zero-test", &[&good[..24]], &[]).unwrap_err();
+    assert!(matches!(e, crate::Error::Bug(_)) && e.to_string().contains("pipeline `zero-test`"), "{e}");
+}
+
+/// A module with one variable (id 10) of storage class `class` at `set` and `binding`, pointing
+/// at type `pointee`, which `types` define (ids 5 to 8; id 1 is `float`, 2 `uint`, 3 the `uint`
+/// constant 4).
+fn module(class: StorageClass, set: u32, binding: u32, pointee: u32, types: &[Instruction]) -> Vec<u8> {
+    let mut body = vec![
+        (Op::Decorate, vec![10, Decoration::DescriptorSet as u32, set]),
+        (Op::Decorate, vec![10, Decoration::Binding as u32, binding]),
+        (Op::TypeFloat, vec![1, 32]),
+        (Op::TypeInt, vec![2, 32, 0]),
+        (Op::Constant, vec![2, 3, 4]),
+    ];
+    body.extend(types.iter().cloned());
+    body.push((Op::TypePointer, vec![9, class as u32, pointee]));
+    body.push((Op::Variable, vec![9, 10, class as u32]));
+    let mut words = vec![spirv::MAGIC_NUMBER, 0x0001_0600, 0, 11, 0];
+    for (op, ops) in body {
+        words.push(((ops.len() as u32 + 1) << 16) | op as u32);
+        words.extend(ops);
+    }
+    words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+/// `OpTypeImage` id 5 of `float` with dimension `dim` and `sampled` (1 sampled, 2 storage).
+fn image(dim: Dim, sampled: u32) -> Instruction {
+    (Op::TypeImage, vec![5, 1, dim as u32, 0, 0, 0, sampled, 0])
+}
+
+/// The one binding of a module from [`module`] at set 0, binding 2.
+fn one(class: StorageClass, pointee: u32, types: &[Instruction]) -> ShaderBinding {
+    let r = reflect(&module(class, 0, 2, pointee, types)).unwrap();
+    assert_eq!(r.source, None);
+    assert_eq!(r.bindings.len(), 1);
+    r.bindings[0].clone()
+}
+
+#[test]
+fn each_kind_of_resource_has_its_descriptor_type() {
+    use vk::DescriptorType as D;
+    use StorageClass::{StorageBuffer, Uniform, UniformConstant};
+    let block = |d: Decoration| vec![(Op::TypeStruct, vec![5, 1]), (Op::Decorate, vec![5, d as u32])];
+    let cases: Vec<(StorageClass, u32, Vec<Instruction>, D)> = vec![
+        (UniformConstant, 5, vec![(Op::TypeSampler, vec![5])], D::SAMPLER),
+        (UniformConstant, 6, vec![image(Dim::Dim2D, 1), (Op::TypeSampledImage, vec![6, 5])], D::COMBINED_IMAGE_SAMPLER),
+        (UniformConstant, 5, vec![image(Dim::DimCube, 1)], D::SAMPLED_IMAGE),
+        (UniformConstant, 5, vec![image(Dim::Dim2D, 2)], D::STORAGE_IMAGE),
+        (UniformConstant, 5, vec![image(Dim::DimBuffer, 1)], D::UNIFORM_TEXEL_BUFFER),
+        (UniformConstant, 5, vec![image(Dim::DimBuffer, 2)], D::STORAGE_TEXEL_BUFFER),
+        (UniformConstant, 5, vec![image(Dim::DimSubpassData, 2)], D::INPUT_ATTACHMENT),
+        (UniformConstant, 5, vec![(Op::TypeAccelerationStructureKHR, vec![5])], D::ACCELERATION_STRUCTURE_KHR),
+        (Uniform, 5, block(Decoration::Block), D::UNIFORM_BUFFER),
+        (Uniform, 5, block(Decoration::BufferBlock), D::STORAGE_BUFFER),
+        (StorageBuffer, 5, block(Decoration::Block), D::STORAGE_BUFFER),
+    ];
+    for (class, pointee, types, want) in cases {
+        let b = one(class, pointee, &types);
+        assert_eq!((b.set, b.binding, b.ty, b.count), (0, 2, want, 1), "{class:?} {types:?}");
+    }
+}
+
+#[test]
+fn arrays_of_descriptors_are_counted_and_refused() {
+    let sized = [image(Dim::Dim2D, 2), (Op::TypeArray, vec![6, 5, 3])];
+    let b = one(StorageClass::UniformConstant, 6, &sized);
+    assert_eq!((b.ty, b.count), (vk::DescriptorType::STORAGE_IMAGE, 4));
+    let runtime = [image(Dim::Dim2D, 1), (Op::TypeRuntimeArray, vec![6, 5])];
+    assert_eq!(one(StorageClass::UniformConstant, 6, &runtime).count, 0);
+    let declared = [vk::DescriptorType::STORAGE_IMAGE; 3];
+    let m = module(StorageClass::UniformConstant, 0, 2, 6, &sized);
+    let e = check_layout("array-test", &[&m], &declared).unwrap_err().to_string();
+    assert!(
+        e.contains("shader array-test, binding 2: the shader has an array of 4 descriptors, the layout one"),
+        "{e}"
+    );
+}
+
+#[test]
+fn variables_that_are_no_descriptors_are_left_out() {
+    let push = module(StorageClass::PushConstant, 0, 0, 5, &[(Op::TypeStruct, vec![5, 1])]);
+    assert!(reflect(&push).unwrap().bindings.is_empty());
+}
+
+#[test]
+fn a_resource_of_unknown_type_is_an_error() {
+    let e = reflect(&module(StorageClass::UniformConstant, 0, 1, 1, &[])).unwrap_err().to_string();
+    assert!(e.contains("binding 1"), "{e}");
+}
