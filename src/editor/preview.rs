@@ -8,7 +8,7 @@
 //! Refinement frames keep to the same budget by the samples they add (at most `REFINE_STEP`):
 //! `wall = fixed + per_sample · samples`, from the refinement frames just finished; the first adds
 //! one sample. A stroke that starts while the view refines waits for the frames in flight, so on a
-//! slow device a 16-sample frame (1.7–2.5 s at 1280×720 on lavapipe) was a stall of seconds.
+//! slow device a 16-sample frame at window size would be a stall of seconds.
 
 use std::collections::VecDeque;
 

@@ -31,7 +31,7 @@ pub struct Plan {
     pub repeats: usize,
     /// The frames of the goal rows at `size` and of the control rows: more than the other rows'
     /// `repeats`, so that their medians hold through a slow spell of a few frames (on a shared
-    /// 2-core machine running lavapipe one 5-frame goal row spanned 38.9–50.8 ms).
+    /// 2-core machine running lavapipe a 5-frame goal row spreads by a quarter of its median).
     pub goal_repeats: usize,
     /// The sizes of the goal rows, `size` first (the larger ones take `repeats` frames).
     pub goal_sizes: Vec<(u32, u32)>,
@@ -198,8 +198,8 @@ fn pixel_samples(m: &Material, s: &Settings, covered: u64) -> u64 {
         .iter()
         .filter(|l| l.albedo.iter().any(|&a| a != 0.0))
         .map(|l| {
-            let v = crate::render::lobe::Variant::of(m, l, true);
-            (1 + u64::from(v.split)) * (1 + u64::from(v.sym))
+            let v = crate::render::lobe::Variant::of(m, l, crate::render::lobe::Lookup::Prefiltered);
+            (1 + u64::from(v.shape.split)) * (1 + u64::from(v.sym))
         })
         .sum();
     covered * u64::from(s.spp) * components
@@ -455,9 +455,8 @@ fn control_frames(rows: &[Measurement]) -> (Vec<f64>, Option<f64>) {
 
 /// The run's stability (`control::stability`) over the whole-frame medians of the control rows and
 /// of the goal row of their configuration, which runs between the first two: one configuration's
-/// medians at four points of the run must agree. On the 2-core lavapipe machine a
-/// run's three control rows measured 77.3, 78.0 and 75.3 ms (3.5 % apart) around a goal row of
-/// 62.6 ms, the same configuration (`bench`, llvmpipe, its arithmetic peak at 72 GFLOP/s).
+/// medians at four points of the run must agree (`bench.json`'s `control_spread` gives how far
+/// apart they were).
 pub fn stability(rows: &[Measurement]) -> super::control::Stability {
     let (mut medians, goal) = control_frames(rows);
     medians.extend(goal);

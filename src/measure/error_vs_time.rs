@@ -45,10 +45,9 @@ impl Plan {
             spps: vec![1, 2, 4, 8, 16, 32, 64, 128, 256],
             size: 64,
             reference_spp: 4096,
-            // Nine timed frames a configuration: on the 2-core lavapipe machine one configuration's
-            // frames span 0.80–1.31× their median (the medians over the sweep's 396
-            // configurations), and `key`'s cheapest frame is 0.74–1.15× `fis`-8's on 43 of the 44
-            // scenes, so the frontier goal is often decided by a few percent.
+            // Nine timed frames a configuration: on lavapipe one configuration's frames spread by
+            // tens of percent about their median, and `key`'s cheapest frame is near `fis`-8's on
+            // most scenes, so the frontier goal is often decided by a few percent.
             repeats: 9,
             hdri: PathBuf::from(super::DEFAULT_HDRI_DIR),
         }
@@ -224,8 +223,7 @@ fn sweep(renderer: &mut Renderer, plan: &Plan, out: &Path, progress: bool) -> Re
             // after the untimed frames' forward run), so that each frame follows a neighbour of its
             // own configuration in the list, and never the longest frame (`mis` at the most
             // samples, tens of milliseconds) of a run in the other order: a frame after that one
-            // runs slower on lavapipe (at 32², the first configuration, `key` at 1 spp, took 4.0 ms
-            // there against 3.1 ms for the next, 4 spp, on studio's sharp lobe).
+            // runs slower on lavapipe.
             let rounds = plan.repeats.max(1);
             let mut times = vec![Vec::new(); configs.len()];
             for round in 0..rounds {

@@ -55,10 +55,9 @@ impl Estimator {
 }
 
 /// The bright light samples the `key` estimator's lobe passes take per pixel for `spp` BRDF
-/// samples per component: as many, at most [`MAX_LIGHT_SAMPLES`]. (Four per BRDF sample cut the
-/// 8-spp error of the lobes that take them by 1.4–5× on the 64² sweep — studio medium 0.111 →
-/// 0.064, sky sharp 0.117 → 0.023 — but cost as much as doubling the BRDF samples, which did as
-/// well: medium 0.061 at 16 spp; lobe pass at 512², anisotropic, 88 → 177 ms.)
+/// samples per component: as many, at most [`MAX_LIGHT_SAMPLES`]. (Four per BRDF sample lower the
+/// error of the lobes that take them, but cost as much as doubling the BRDF samples, which does as
+/// well: docs/renderer.md, Alternatives measured and rejected.)
 pub fn key_light_samples(spp: u32) -> u32 {
     spp.clamp(1, MAX_LIGHT_SAMPLES)
 }

@@ -8,7 +8,7 @@
 //! executes a timestamp while a framebuffer is bound: it bins the query into the rasteriser's
 //! scene, and the clock is read when that scene is rasterised, at the next flush, on the rasteriser's
 //! threads. Compute dispatches run synchronously in between, so a compute pass's first timestamp was
-//! read after the pass had run: the editor's lobe passes read 0.05–0.1 ms for passes of ~200 ms
+//! read after the pass had run: the editor's lobe passes read a small fraction of their real time
 //! (frames that reuse the G-buffer, after egui had drawn into the swapchain image). The copy makes
 //! the queue wait until the clock has been read, before the pass's work starts.
 

@@ -73,8 +73,8 @@ pub const REACH_TEST_MAX_DEG: f64 = 75.0;
 /// `lobe_lights.glsl` tests the mirror direction of one view, a facet lobe's about its facet
 /// normal) and a reach within [`REACH_TEST_MAX_DEG`].
 pub fn reach_test_pays(material: &Material, lobe: &Lobe) -> bool {
-    let v = Variant::of(material, lobe, true);
-    !(v.split || v.sym) && reach_angle(material.normalization, lobe).to_degrees() <= REACH_TEST_MAX_DEG
+    let v = Variant::of(material, lobe, super::Lookup::Residual);
+    !(v.shape.split || v.sym) && reach_angle(material.normalization, lobe).to_degrees() <= REACH_TEST_MAX_DEG
 }
 
 /// The angles from the normal, along each axis of `lobe`'s tangent frame, past which its half vector

@@ -4,8 +4,8 @@
 //!
 //! On a CPU device (Mesa lavapipe) a transfer clear or copy is a `memset`/`memcpy` on the host, far
 //! cheaper than a shader over the same pixels (whose cost is per lane), so the frame clears and
-//! copies. On a GPU, image clears and copies go through the transfer or raster path: on an H200 they
-//! ran at 50–60 GB/s against 2.4–2.9 TB/s for compute shaders writing the same images, so the frame
+//! copies. On a GPU, image clears and copies go through the transfer or raster path, far slower
+//! than compute shaders writing the same images (docs/renderer.md, Device plan), so the frame
 //! writes its images from compute passes instead.
 
 use ash::vk;

@@ -3,9 +3,10 @@
 //! the reach test) and where it writes (the accumulation image or the filter's images).
 
 use super::lights::{Cut, KeyLightSet, TileLights, WideLightSet};
+use super::variant::{Into, KeyLights, Lookup, Output, Reach, Variant};
 use super::{Plan, Request};
 use crate::brdf::Lobe;
-use crate::render::lobe::{self, Into, Output, Variant};
+use crate::render::lobe;
 use crate::render::{denoise, Estimator};
 use crate::scene::keylight::tiles::{max_points, tile_alpha, TileSet};
 use crate::scene::keylight::{quadrature_fits, KeyLight, MAX_LIGHTS};
@@ -49,7 +50,11 @@ impl LobeStep {
 /// The lobe passes of the frame `r` asks for, in lobe order; what it leaves out goes to `p`.
 pub fn choose(r: &Request, sparse: bool, p: &mut Plan) -> Vec<LobeStep> {
     let key = r.estimator == Estimator::Key;
-    let prefilter = matches!(r.estimator, Estimator::Fis | Estimator::Key);
+    let lookup = match r.estimator {
+        Estimator::Key => Lookup::Residual,
+        Estimator::Plain => Lookup::Level0,
+        _ => Lookup::Prefiltered,
+    };
     let lights = r.lights.filter(|_| key);
     if key && lights.is_none() {
         p.leave_out("light term", "the map has no key lights");
@@ -61,14 +66,15 @@ pub fn choose(r: &Request, sparse: bool, p: &mut Plan) -> Vec<LobeStep> {
             p.leave_out(format!("lobe{i}"), "its albedo is 0");
             continue;
         }
-        let base = Variant { vec4: !r.options.scalar_lobes, key, ..Variant::of(r.material, l, prefilter) };
+        let base = Variant { vec4: !r.options.scalar_lobes, ..Variant::of(r.material, l, lookup) };
         let (mut variant, tiles) = match lights {
             Some(k) => key_lights(r, l, base, k),
             None => (base, None),
         };
         // Where the pass writes: the rough lobes the filter takes, sampled once a 2 × 2 block in
         // sparse frames.
-        let filtered = r.options.denoise && variant.key && denoise::fits(l, variant.lights && !variant.points, floor);
+        let mis_lights = matches!(variant.lights, KeyLights::Samples { .. });
+        let filtered = r.options.denoise && variant.key() && denoise::fits(l, mis_lights, floor);
         let into = match (filtered, sparse) {
             (false, _) => Into::Accum,
             (true, true) => Into::Cells { pixel_lights: denoise::pixel_lights(l, r.width, r.height) },
@@ -77,12 +83,12 @@ pub fn choose(r: &Request, sparse: bool, p: &mut Plan) -> Vec<LobeStep> {
         // The editor's stand-in (`LobePass::ready`) covers every lobe that may leave `Accum`.
         debug_assert!(into == Into::Accum || variant.outputs_vary(), "{variant:?} writes {into:?}");
         variant.output = if r.options.any_output_lobes { Output::Any } else { into.output() };
-        let lights = match (variant.lights, variant.points, variant.wide, tiles) {
-            (false, ..) => LobeLights::None,
-            (true, false, ..) => LobeLights::Samples,
-            (true, true, _, Some(t)) => LobeLights::Tiles(t),
-            (true, true, true, None) => LobeLights::WidePoints,
-            (true, true, false, None) => LobeLights::Points,
+        let lights = match (variant.lights, tiles) {
+            (KeyLights::None, _) => LobeLights::None,
+            (KeyLights::Samples { .. }, _) => LobeLights::Samples,
+            (KeyLights::Points { .. }, Some(t)) => LobeLights::Tiles(t),
+            (KeyLights::Points { wide: true, .. }, None) => LobeLights::WidePoints,
+            (KeyLights::Points { wide: false, .. }, None) => LobeLights::Points,
         };
         steps.push(LobeStep { index: i as u32, variant, into, lights });
     }
@@ -129,21 +135,22 @@ fn key_lights(r: &Request, l: &Lobe, base: Variant, k: &KeyLightSet) -> (Variant
     let points = whole || tiled;
     let tests_reach = r.options.light_reach_test && pays && (!points || tiled);
     // The lights of the cone table the test reads (`LobePass::record`).
-    let light_slots = match (tests_reach, wide) {
-        (false, _) => MAX_LIGHTS,
-        (true, true) => k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len()),
-        (true, false) => k.lights.len(),
+    let reach = match (tests_reach, wide) {
+        (false, _) => Reach::Untested,
+        (true, true) => Reach::Tested { slots: slots(k.wide.as_ref().map_or(MAX_LIGHTS, |w| w.all.len())) },
+        (true, false) => Reach::Tested { slots: slots(k.lights.len()) },
     };
-    let variant = Variant {
-        lights: true,
-        points,
-        wide,
-        reach: tests_reach,
-        light_slots: light_slots.clamp(1, MAX_LIGHTS) as u8,
-        oriented: tile_set.as_ref().map_or(0, |t| t.oriented as u8),
-        ..base
+    let lights = if points {
+        KeyLights::Points { wide, reach, strips: tile_set.as_ref().map_or(0, |t| t.oriented as u8) }
+    } else {
+        KeyLights::Samples { reach }
     };
-    (variant, tile_set)
+    (Variant { lights, ..base }, tile_set)
+}
+
+/// The cone table's slots for `n` lights (at least one, at most the table's).
+fn slots(n: usize) -> u8 {
+    n.clamp(1, MAX_LIGHTS) as u8
 }
 
 /// Cuts a lobe's lights into round tiles or, for an anisotropic lobe of one component, strips
@@ -158,7 +165,7 @@ impl<'a> Cutter<'a> {
     fn new(r: &Request, l: &Lobe, base: Variant, lights: &'a KeyLightSet) -> Cutter<'a> {
         let round = Cut::Tiles(tile_alpha(l.alpha_x, l.alpha_y));
         let (narrow, broad) = (l.alpha_x.min(l.alpha_y), l.alpha_x.max(l.alpha_y));
-        let streak = (r.options.light_strips && !(base.split || base.sym) && narrow < broad)
+        let streak = (r.options.light_strips && !(base.shape.split || base.sym) && narrow < broad)
             .then_some(Cut::Strips(narrow, broad));
         Cutter { lights, round, streak }
     }

@@ -14,15 +14,16 @@ mod lobes;
 mod show;
 #[cfg(test)]
 mod tests;
+pub mod variant;
 
 pub use device::{DevicePlan, ENV};
 pub use lights::{Cut, KeyLightSet, TileLights, WideLightSet};
 pub use lobes::{LobeLights, LobeStep};
 
-use super::lobe::Into;
 use super::{denoise, key_light_samples, Estimator, View};
 use crate::brdf::Material;
 use crate::scene::Camera;
+use variant::Into;
 
 /// The renderer's choices that a user (`bench`, `report`, the tests) may compare; each default is
 /// the measured better one (docs/renderer.md, Alternatives measured and rejected).
@@ -243,7 +244,7 @@ pub fn plan(r: &Request) -> Plan {
     }
     p.sparse = r.options.sparse_filter && denoise::sparse(r.spp, r.width, r.height);
     let lobes = if r.estimator == Estimator::Mis { Vec::new() } else { lobes::choose(r, p.sparse, &mut p) };
-    if lobes.iter().any(|l| l.variant.lights && !l.variant.points) {
+    if lobes.iter().any(|l| matches!(l.variant.lights, variant::KeyLights::Samples { .. })) {
         p.light_samples = Some(key_light_samples(r.spp));
     }
     start(r, &lobes, &mut p);

@@ -2,9 +2,9 @@
 
 use glam::{DQuat, DVec3};
 
+use super::variant::{Into, KeyLights, Output, Reach};
 use super::*;
 use crate::brdf::{Lobe, Material, Normalization};
-use crate::render::lobe::{Into, Output};
 use crate::scene::{keylight, Environment};
 
 fn material(diffuse: f64, lobes: Vec<Lobe>) -> Material {
@@ -216,7 +216,7 @@ fn a_map_without_key_lights_gets_no_light_code() {
     let p = Ask::new(Estimator::Key, 32, 8).plan(&m, None);
     assert_eq!(left(&p, "light term").as_deref(), Some("the map has no key lights"));
     let l = p.lobes().next().expect("a lobe pass");
-    assert!(!l.variant.lights && l.lights == LobeLights::None && p.light_samples.is_none());
+    assert!(l.variant.lights == KeyLights::None && l.lights == LobeLights::None && p.light_samples.is_none());
 }
 
 #[test]
@@ -227,10 +227,10 @@ fn key_lobes_see_the_lights_as_points_tiles_or_samples_by_their_width() {
     let lobes: Vec<&LobeStep> = p.lobes().collect();
     // A lobe much wider than the lamp sees it as its four points.
     assert_eq!(lobes[0].lights, LobeLights::Points);
-    assert!(lobes[0].variant.points && !lobes[0].variant.reach);
+    assert!(lobes[0].variant.points() && lobes[0].variant.reach() == Reach::Untested);
     // A narrow lobe resolves the lamp: tiles, with the reach test (it pays for a lobe this narrow).
     assert!(matches!(lobes[1].lights, LobeLights::Tiles(_)), "{:?}", lobes[1].lights);
-    assert!(lobes[1].variant.points && lobes[1].variant.reach);
+    assert!(lobes[1].variant.points() && lobes[1].variant.reach() != Reach::Untested);
     assert!(p.light_samples.is_none());
     // Without tiles it takes MIS light samples, which the frame draws.
     let untiled =
@@ -238,12 +238,12 @@ fn key_lobes_see_the_lights_as_points_tiles_or_samples_by_their_width() {
     let p = untiled.plan(&m, Some(&lights));
     let sharp = p.lobes().nth(1).expect("two lobe passes");
     assert_eq!(sharp.lights, LobeLights::Samples);
-    assert!(!sharp.variant.points && sharp.variant.reach);
+    assert!(matches!(sharp.variant.lights, KeyLights::Samples { reach: Reach::Tested { .. } }));
     assert_eq!(p.light_samples, Some(8));
     // The reach test is the options' to turn off, never the image's.
     let unreached =
         Ask { options: Options { light_reach_test: false, ..Options::default() }, ..Ask::new(Estimator::Key, 32, 8) };
-    assert!(unreached.plan(&m, Some(&lights)).lobes().all(|l| !l.variant.reach));
+    assert!(unreached.plan(&m, Some(&lights)).lobes().all(|l| l.variant.reach() == Reach::Untested));
     // `fis` ignores the lights.
     assert!(Ask::new(Estimator::Fis, 32, 8).plan(&m, Some(&lights)).lobes().all(|l| l.lights == LobeLights::None));
 }
