@@ -38,8 +38,10 @@ impl AccumulatePass {
         if first {
             targets.sum.discard_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
         }
+        let bindings = [Binding::StorageImageRead(&targets.accum), Binding::StorageImage(&targets.sum)];
+        self.pipeline.check_bindings(&bindings)?;
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        descriptor::write(ctx, set, &[Binding::StorageImageRead(&targets.accum), Binding::StorageImage(&targets.sum)]);
+        descriptor::write(ctx, set, &bindings);
         let push = [targets.width, targets.height, first as u32, 0, (samples as f32).to_bits(), 0, 0, 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
         ctx.counts.dispatch();

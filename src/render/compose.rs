@@ -107,12 +107,14 @@ impl ComposePass {
             // Earlier frames' copies out of the image come first.
             barrier::memory(ctx, cmd, barrier::TRANSFER_READ, barrier::COMPUTE_WRITE);
         }
+        let bindings =
+            [Binding::StorageImage(window), Binding::StorageImageRead(mesh), Binding::StorageImageRead(canvas)];
+        // The one set serves every pipeline (below), so it is checked against each.
+        for pipeline in &self.pipelines {
+            pipeline.check_bindings(&bindings)?;
+        }
         let set = descriptor::allocate(ctx, pool, self.pipelines[0].set_layout)?;
-        descriptor::write(
-            ctx,
-            set,
-            &[Binding::StorageImage(window), Binding::StorageImageRead(mesh), Binding::StorageImageRead(canvas)],
-        );
+        descriptor::write(ctx, set, &bindings);
         let (mx, my) = p.marker.unwrap_or((0.0, 0.0));
         let mut push = ComposePush {
             window_size: [window.width, window.height, p.mesh.2, p.marker.is_some() as u32],

@@ -47,12 +47,10 @@ impl EvalPass {
             made.push(Buffer::upload(ctx, &super::gpu::material_bytes(material), usage, "eval.material")?);
             let p = descriptor::pool(ctx, 1, "eval.descriptors")?;
             pool = Some(p);
+            let bindings = [Binding::StorageRead(&made[0]), Binding::Storage(&made[1]), Binding::StorageRead(&made[2])];
+            self.pipeline.check_bindings(&bindings)?;
             let set = descriptor::allocate(ctx, p, self.pipeline.set_layout)?;
-            descriptor::write(
-                ctx,
-                set,
-                &[Binding::StorageRead(&made[0]), Binding::Storage(&made[1]), Binding::StorageRead(&made[2])],
-            );
+            descriptor::write(ctx, set, &bindings);
             ctx.commands.run(&ctx.device, |cmd| {
                 self.pipeline.bind(ctx, cmd, set, &(pairs.len() as u32).to_ne_bytes());
                 ctx.counts.dispatch();

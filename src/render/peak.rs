@@ -55,9 +55,14 @@ impl Scratch {
             }
         };
         let mut scratch = Scratch { out, pool, set: vk::DescriptorSet::null() };
-        match descriptor::allocate(ctx, pool, pass.pipeline.set_layout) {
+        let bindings = [Binding::Storage(&scratch.out)];
+        match pass
+            .pipeline
+            .check_bindings(&bindings)
+            .and_then(|()| descriptor::allocate(ctx, pool, pass.pipeline.set_layout))
+        {
             Ok(set) => {
-                descriptor::write(ctx, set, &[Binding::Storage(&scratch.out)]);
+                descriptor::write(ctx, set, &bindings);
                 scratch.set = set;
                 Ok(scratch)
             }

@@ -57,9 +57,11 @@ impl<'a> Recording<'a> {
         self.env.ok_or_else(|| Error::input("render", "a mesh view needs an environment map (--env)"))
     }
 
-    /// A descriptor set of `pipeline`'s layout pointing at `bindings`, whose accesses the dispatches
+    /// A descriptor set of `pipeline`'s layout pointing at `bindings` (checked against the layout
+    /// and its shaders' `readonly`: [`Pipeline::check_bindings`]), whose accesses the dispatches
     /// that bind it are ordered by.
     pub fn set(&self, pipeline: &Pipeline, bindings: &[Binding<'_>]) -> Result<vk::DescriptorSet> {
+        pipeline.check_bindings(bindings)?;
         let set = descriptor::allocate(self.ctx, self.pool, pipeline.set_layout)?;
         descriptor::write(self.ctx, set, bindings);
         self.sets.borrow_mut().push((set, hazards::accesses(bindings)));

@@ -38,9 +38,10 @@ impl ZeroPass {
         for i in images {
             i.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         }
+        let bindings = [Binding::StorageImage(first), Binding::StorageImage(second.unwrap_or(first))];
+        self.pipeline.check_bindings(&bindings)?;
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        let view = |i| Binding::StorageImage(i);
-        descriptor::write(ctx, set, &[view(first), view(second.unwrap_or(first))]);
+        descriptor::write(ctx, set, &bindings);
         let (w, h) = (first.width, first.height);
         let push = [w, h, u32::from(second.is_some()), 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));

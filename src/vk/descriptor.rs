@@ -1,10 +1,11 @@
 //! Descriptor set layouts, one pool per renderer, and the writes that point sets at buffers and
-//! images. Bindings are numbered in the order given.
+//! images. Bindings are numbered in the order given. [`check`] holds a list of resources to the
+//! layout of the pipeline whose set it is written to, before it is written.
 
 use ash::vk;
 
 use super::{vk_err, Buffer, Context, Image};
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// A set layout with bindings `0..types.len()` of the given types, visible to `stages`.
 pub fn layout(
@@ -132,4 +133,56 @@ impl Binding<'_> {
             Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         }
     }
+
+    /// Whether the binding passes a storage resource as read only ([`Binding::StorageRead`],
+    /// [`Binding::StorageImageRead`]): the dispatch is taken to leave it unchanged.
+    pub fn read_only(&self) -> bool {
+        matches!(self, Binding::StorageRead(_) | Binding::StorageImageRead(_))
+    }
 }
+
+/// One binding of a pipeline's set: the type its pass declares, and whether its shaders may write
+/// it (a storage resource not `readonly` in some stage: `reflect::check_layout`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Declared {
+    pub ty: vk::DescriptorType,
+    pub writable: bool,
+}
+
+/// Checks `bindings`, about to be written to a set of pipeline `pipeline` whose bindings are
+/// `declared`: as many bindings, each of its declared type, and none passed read-only where the
+/// shader may write it (`vk::hazards` orders later dispatches after declared writes alone, so such
+/// a write would go without its barrier). A mismatch is a bug in the program ([`Error::Bug`]); the
+/// error names the pipeline, each binding concerned, what was declared and what was written.
+pub fn check(pipeline: &str, declared: &[Declared], bindings: &[Binding<'_>]) -> Result<()> {
+    check_written(pipeline, declared, bindings.iter().map(|b| (b.ty(), b.read_only())))
+}
+
+/// [`check`] on what each binding is written as: its type, and whether it is passed read-only.
+fn check_written(
+    pipeline: &str,
+    declared: &[Declared],
+    written: impl ExactSizeIterator<Item = (vk::DescriptorType, bool)>,
+) -> Result<()> {
+    let mut problems = Vec::new();
+    if written.len() != declared.len() {
+        problems.push(format!("{} bindings written, the layout declares {}", written.len(), declared.len()));
+    }
+    for (i, ((ty, read_only), d)) in written.zip(declared).enumerate() {
+        if ty != d.ty {
+            problems.push(format!("binding {i}: declared {:?}, written {ty:?}", d.ty));
+        } else if read_only && d.writable {
+            problems.push(format!("binding {i}: declared {ty:?}, written read-only, but the shader may write it"));
+        }
+    }
+    if problems.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Bug(format!(
+        "pipeline `{pipeline}`: the resources written to its set do not match its layout: {}",
+        problems.join("; ")
+    )))
+}
+
+#[cfg(test)]
+mod tests;

@@ -157,6 +157,7 @@ mod tests {
                     ),
                 ];
                 for (pipeline, binds, push) in &steps {
+                    pipeline.check_bindings(binds)?;
                     let set = descriptor::allocate(&ctx, pool, pipeline.set_layout)?;
                     descriptor::write(&ctx, set, binds);
                     if derive {

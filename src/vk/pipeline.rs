@@ -1,10 +1,13 @@
 //! Pipelines with their layout and their one descriptor set layout: compute pipelines with
 //! specialisation constants (ids `0..n`, all `u32`), and the rasterising pipeline of the G-buffer
 //! (dynamic rendering, no render-pass objects). Each is made only once its declared bindings are
-//! checked against its shaders' ([`reflect::check_layout`]).
+//! checked against its shaders' ([`reflect::check_layout`]); it keeps them, with which ones its
+//! shaders may write, to check each list of resources written to one of its sets
+//! ([`Pipeline::check_bindings`]).
 
 use ash::vk;
 
+use super::descriptor::{Binding, Declared};
 use super::{descriptor, reflect, shader, vk_err, Context};
 use crate::error::Result;
 
@@ -14,6 +17,15 @@ pub struct Pipeline {
     pub set_layout: vk::DescriptorSetLayout,
     pub bind_point: vk::PipelineBindPoint,
     pub push_stages: vk::ShaderStageFlags,
+    /// The name it was made with, for the errors of [`Pipeline::check_bindings`].
+    pub name: String,
+    /// Its set's bindings as its pass declares them, with which ones its shaders may write.
+    pub declared: Vec<Declared>,
+}
+
+/// The declared `types` with the `writable` flags [`reflect::check_layout`] returns for them.
+fn declared(types: &[vk::DescriptorType], writable: Vec<bool>) -> Vec<Declared> {
+    types.iter().zip(writable).map(|(&ty, writable)| Declared { ty, writable }).collect()
 }
 
 /// The set layout and pipeline layout, unnamed (see [`Pipeline::name`]).
@@ -113,7 +125,7 @@ impl Pipeline {
         push_size: u32,
         spec: &[u32],
     ) -> Result<Pipeline> {
-        reflect::check_layout(name, &[spv], bindings)?;
+        let writable = reflect::check_layout(name, &[spv], bindings)?;
         let stages = vk::ShaderStageFlags::COMPUTE;
         let module = shader::module_on(raw, spv, name)?;
         let (set_layout, layout) = match layouts(raw, bindings, stages, push_size) {
@@ -146,6 +158,8 @@ impl Pipeline {
             set_layout,
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_stages: stages,
+            name: name.to_string(),
+            declared: declared(bindings, writable),
         };
         finish(raw, created, p, "vkCreateComputePipelines")
     }
@@ -171,7 +185,7 @@ impl Pipeline {
         colors: &[vk::Format],
         depth: vk::Format,
     ) -> Result<Pipeline> {
-        reflect::check_layout(name, &[vert, frag], bindings)?;
+        let writable = reflect::check_layout(name, &[vert, frag], bindings)?;
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let vs = shader::module(ctx, vert, &format!("{name}.vert"))?;
         let fs = match shader::module(ctx, frag, &format!("{name}.frag")) {
@@ -262,10 +276,18 @@ impl Pipeline {
             set_layout,
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_stages: stages,
+            name: name.to_string(),
+            declared: declared(bindings, writable),
         };
         let p = finish(ctx.raw(), created, p, "vkCreateGraphicsPipelines")?;
         p.name(ctx, name);
         Ok(p)
+    }
+
+    /// Checks `bindings`, about to be written to a set of this pipeline's layout, against its
+    /// declared bindings and its shaders' `readonly` ([`descriptor::check`]).
+    pub fn check_bindings(&self, bindings: &[Binding<'_>]) -> Result<()> {
+        descriptor::check(&self.name, &self.declared, bindings)
     }
 
     /// Binds the pipeline, its descriptor set and the push constants.

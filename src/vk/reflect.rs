@@ -5,13 +5,18 @@
 //! so a declaration out of step with its shader fails there, named, instead of reading the wrong
 //! resource on the GPU (which the validation layer reports only when it runs).
 //!
-//! This module reads the few instructions it needs itself (names, `OpSource`, `OpDecorate`, the
-//! image, sampler, array, struct and pointer types, constants and `OpVariable`), with the opcode
-//! and enum values of the `spirv` crate (the SPIR-V grammar as Rust enums). The reflection crates
-//! do not read this program's shaders: `rspirv`'s module loader rejects the `OpExecutionModeId`
-//! that shaderc emits for every Vulkan 1.3 compute shader, and the `OpSource` text that glslang
-//! writes for a shader with non-ASCII comments (not valid UTF-8: `gbuffer.frag`); `spirq` fails to
-//! evaluate the `OpSpecConstantOp LogicalNot` of `compact.comp`.
+//! [`check_layout`] also returns which declared bindings the shaders may write (a storage resource
+//! not `readonly`): what [`super::descriptor::check`] holds the bindings a pass passes read-only
+//! to, each time it writes a set.
+//!
+//! This module reads the few instructions it needs itself (names, `OpSource`, `OpDecorate`,
+//! `OpMemberDecorate`, the image, sampler, array, struct and pointer types, constants and
+//! `OpVariable`), with the opcode and enum values of the `spirv` crate (the SPIR-V grammar as Rust
+//! enums). The reflection crates do not read this program's shaders: `rspirv`'s module loader
+//! rejects the `OpExecutionModeId` that shaderc emits for every Vulkan 1.3 compute shader, and the
+//! `OpSource` text that glslang writes for a shader with non-ASCII comments (not valid UTF-8:
+//! `gbuffer.frag`); `spirq` fails to evaluate the `OpSpecConstantOp LogicalNot` of
+//! `compact.comp`.
 //!
 //! Which bindings a module holds: `build.rs` compiles with shaderc's performance optimisation,
 //! which removes every resource that no code reads, and keeps the resources that only a
@@ -24,7 +29,7 @@
 //!
 //! Owns no Vulkan object and calls no Vulkan function.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use ash::vk;
 use spirv::{Decoration, Dim, Op, StorageClass};
@@ -41,6 +46,10 @@ pub struct ShaderBinding {
     pub count: u32,
     /// The variable's name in the source (`OpName`), empty where the module carries no names.
     pub name: String,
+    /// Whether the shader may write through the binding: a storage buffer, image or texel buffer
+    /// not `readonly` in GLSL (SPIR-V `NonWritable` on the variable or, for a buffer block, on
+    /// every member of its block, where glslang puts it). False for the types no shader writes.
+    pub writable: bool,
 }
 
 /// What reflection reads from one module.
@@ -80,8 +89,12 @@ pub fn reflect(spv: &[u8]) -> std::result::Result<Reflection, Malformed> {
 /// Declared bindings that no module holds are allowed (see the module note). A mismatch, or a
 /// module this cannot read, is a bug in the program ([`Error::Bug`]); the error names the pipeline,
 /// the shader file, the binding and both types.
-pub fn check_layout(pipeline: &str, modules: &[&[u8]], declared: &[vk::DescriptorType]) -> Result<()> {
+///
+/// Returns, for each declared binding, whether some module may write it
+/// ([`ShaderBinding::writable`]; false for a binding no module holds).
+pub fn check_layout(pipeline: &str, modules: &[&[u8]], declared: &[vk::DescriptorType]) -> Result<Vec<bool>> {
     let mut problems = Vec::new();
+    let mut writable = vec![false; declared.len()];
     for spv in modules {
         let found = reflect(spv)
             .map_err(|e| Error::Bug(format!("pipeline `{pipeline}`: its SPIR-V cannot be reflected: {e}")))?;
@@ -90,11 +103,13 @@ pub fn check_layout(pipeline: &str, modules: &[&[u8]], declared: &[vk::Descripto
             if let Some(problem) = mismatch(b, declared) {
                 let name = if b.name.is_empty() { String::new() } else { format!(" (`{}`)", b.name) };
                 problems.push(format!("shader {shader}, binding {}{name}: {problem}", b.binding));
+            } else if b.writable {
+                writable[b.binding as usize] = true;
             }
         }
     }
     if problems.is_empty() {
-        return Ok(());
+        return Ok(writable);
     }
     Err(Error::Bug(format!(
         "pipeline `{pipeline}`: its descriptor set layout does not match its shader: {}",
@@ -147,7 +162,9 @@ enum Type {
     RuntimeArray {
         element: u32,
     },
-    Struct,
+    Struct {
+        members: u32,
+    },
     Pointer {
         pointee: u32,
     },
@@ -171,6 +188,10 @@ struct Tables {
     sets: HashMap<u32, u32>,
     /// `Block` or `BufferBlock`, by struct type.
     blocks: HashMap<u32, Decoration>,
+    /// The ids decorated `NonWritable`.
+    non_writable: HashSet<u32>,
+    /// The (struct type, member) pairs decorated `NonWritable`.
+    non_writable_members: HashSet<(u32, u32)>,
     types: HashMap<u32, Type>,
     /// The value (first word) of each scalar constant and the default of each specialisation
     /// constant: what an array type's length refers to.
@@ -212,6 +233,9 @@ impl Tables {
             }
             Op::Source if ops.len() > 2 && self.source_file.is_none() => self.source_file = Some(ops[2]),
             Op::Decorate => self.decorate(word(0)?, word(1)?, ops.get(2).copied()),
+            Op::MemberDecorate if Decoration::from_u32(word(2)?) == Some(Decoration::NonWritable) => {
+                self.non_writable_members.insert((word(0)?, word(1)?));
+            }
             Op::TypeImage => {
                 self.types.insert(word(0)?, Type::Image { dim: word(2)?, sampled: word(6)? });
             }
@@ -228,7 +252,7 @@ impl Tables {
                 self.types.insert(word(0)?, Type::RuntimeArray { element: word(1)? });
             }
             Op::TypeStruct => {
-                self.types.insert(word(0)?, Type::Struct);
+                self.types.insert(word(0)?, Type::Struct { members: ops.len().saturating_sub(1) as u32 });
             }
             Op::TypePointer => {
                 self.types.insert(word(0)?, Type::Pointer { pointee: word(2)? });
@@ -255,6 +279,9 @@ impl Tables {
             }
             (Some(d @ (Decoration::Block | Decoration::BufferBlock)), _) => {
                 self.blocks.insert(target, d);
+            }
+            (Some(Decoration::NonWritable), _) => {
+                self.non_writable.insert(target);
             }
             _ => {}
         }
@@ -286,7 +313,24 @@ impl Tables {
             Malformed(format!("{}: no descriptor type for a {class:?} variable of this type", what()))
         })?;
         let set = self.sets.get(&var.id).copied().unwrap_or(0);
-        Ok(Some(ShaderBinding { set, binding, ty, count, name }))
+        let writable = self.writable(var.id, element, ty);
+        Ok(Some(ShaderBinding { set, binding, ty, count, name, writable }))
+    }
+
+    /// Whether variable `var` of descriptor type `ty`, whose type (arrays taken off) is `element`,
+    /// may be written: a storage type, without `NonWritable` on the variable nor on every member of
+    /// its block.
+    fn writable(&self, var: u32, element: u32, ty: vk::DescriptorType) -> bool {
+        use vk::DescriptorType as D;
+        if !matches!(ty, D::STORAGE_BUFFER | D::STORAGE_IMAGE | D::STORAGE_TEXEL_BUFFER)
+            || self.non_writable.contains(&var)
+        {
+            return false;
+        }
+        match self.types.get(&element) {
+            Some(&Type::Struct { members }) => (0..members).any(|m| !self.non_writable_members.contains(&(element, m))),
+            _ => true,
+        }
     }
 
     /// The descriptor type of a variable of storage class `class` whose type (arrays taken off)
@@ -302,8 +346,8 @@ impl Tables {
             _ => D::SAMPLED_IMAGE,
         };
         match (class?, *self.types.get(&ty)?) {
-            (StorageClass::StorageBuffer, Type::Struct) => Some(D::STORAGE_BUFFER),
-            (StorageClass::Uniform, Type::Struct) => match self.blocks.get(&ty)? {
+            (StorageClass::StorageBuffer, Type::Struct { .. }) => Some(D::STORAGE_BUFFER),
+            (StorageClass::Uniform, Type::Struct { .. }) => match self.blocks.get(&ty)? {
                 Decoration::BufferBlock => Some(D::STORAGE_BUFFER),
                 _ => Some(D::UNIFORM_BUFFER),
             },

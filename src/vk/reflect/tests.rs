@@ -213,3 +213,69 @@ fn a_resource_of_unknown_type_is_an_error() {
     let e = reflect(&module(StorageClass::UniformConstant, 0, 1, 1, &[])).unwrap_err().to_string();
     assert!(e.contains("binding 1"), "{e}");
 }
+
+#[test]
+fn readonly_storage_is_not_writable_and_plain_storage_is() {
+    use StorageClass::{StorageBuffer, Uniform, UniformConstant};
+    let non_writable = Decoration::NonWritable as u32;
+    let storage_image = || vec![image(Dim::Dim2D, 2)];
+    let mut readonly_image = storage_image();
+    readonly_image.push((Op::Decorate, vec![10, non_writable]));
+    // A block of two members, `readonly` as glslang writes it: on every member.
+    let block = |readonly: &[u32]| {
+        let mut types = vec![(Op::TypeStruct, vec![5, 1, 2]), (Op::Decorate, vec![5, Decoration::Block as u32])];
+        types.extend(readonly.iter().map(|&m| (Op::MemberDecorate, vec![5, m, non_writable])));
+        types
+    };
+    let cases: Vec<(&str, StorageClass, Vec<Instruction>, bool)> = vec![
+        ("storage image", UniformConstant, storage_image(), true),
+        ("readonly storage image", UniformConstant, readonly_image, false),
+        ("storage buffer", StorageBuffer, block(&[]), true),
+        ("readonly storage buffer", StorageBuffer, block(&[0, 1]), false),
+        ("storage buffer with one readonly member", StorageBuffer, block(&[1]), true),
+        ("uniform buffer", Uniform, block(&[]), false),
+        ("sampled image", UniformConstant, vec![image(Dim::Dim2D, 1)], false),
+    ];
+    for (what, class, types, writable) in cases {
+        assert_eq!(one(class, 5, &types).writable, writable, "{what}");
+    }
+}
+
+#[test]
+fn each_pass_may_write_the_bindings_its_glsl_leaves_writable() {
+    // Per declared binding: `w` where the shader may write it (not `readonly`), `-` where it
+    // may not (`readonly`, a uniform buffer, a sampler) or lacks it.
+    let expected = [
+        ("accumulate", "-w"),
+        ("background", "-w--"),
+        ("canvas", "w-"),
+        ("compact", "-www---w"),
+        ("compose", "w--"),
+        ("denoise", "-ww"),
+        ("denoise-sparse", "-w-----"),
+        ("diffuse", "-w---"),
+        ("eval", "-w-"),
+        ("gbuffer", ""),
+        ("lobe", "-w-------w"),
+        ("mis", "-w-------"),
+        ("peak", "w"),
+        ("zero", "ww"),
+    ];
+    let pipelines = pipelines();
+    assert_eq!(pipelines.len(), expected.len());
+    for ((name, modules, declared), (want_name, want)) in pipelines.into_iter().zip(expected) {
+        assert_eq!(name, want_name);
+        let writable = check_layout(name, &modules, declared).unwrap();
+        let got: String = writable.iter().map(|&w| if w { 'w' } else { '-' }).collect();
+        assert_eq!(got, want, "{name}");
+    }
+}
+
+#[test]
+fn lobe_reads_its_normals_and_writes_its_accumulation() {
+    let r = reflect(crate::spirv!("lobe.comp")).unwrap();
+    let named = |n: u32| r.bindings.iter().find(|b| b.binding == n).expect("a binding");
+    assert_eq!((named(0).name.as_str(), named(0).writable), ("gnrm", false));
+    assert_eq!((named(1).name.as_str(), named(1).writable), ("accum", true));
+    assert_eq!((named(4).name.as_str(), named(4).writable), ("halton", false));
+}
