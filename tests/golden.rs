@@ -21,6 +21,7 @@ use brdf_shop::render::plan::DevicePlan;
 use brdf_shop::render::{Estimator, Progress, Recorded, Renderer, Settings, View};
 use brdf_shop::scene::{Camera, Environment, Mesh};
 use brdf_shop::vk::Context;
+use common::settings;
 use glam::DVec3;
 
 fn manifest() -> PathBuf {
@@ -30,20 +31,6 @@ fn manifest() -> PathBuf {
 fn env(name: &str) -> Environment {
     let path = common::asset(&format!("hdri/{name}"));
     Environment::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn settings(size: u32, spp: u32, estimator: Estimator) -> Settings {
-    Settings {
-        width: size,
-        height: size,
-        spp,
-        estimator,
-        view: View::Mesh,
-        camera: Camera::default(),
-        light: DVec3::new(0.3, 0.4, 0.866).normalize(),
-        intensity: 1.0,
-        backdrop_blur: 0.0,
-    }
 }
 
 /// FNV-1a over the bits of every channel: equal for bit-identical images.

@@ -22,6 +22,7 @@ use brdf_shop::reference::{self, Image};
 use brdf_shop::render::{Estimator, Progress, Recorded, Renderer, Settings, View};
 use brdf_shop::scene::{Camera, Environment, Mesh};
 use brdf_shop::vk::Context;
+use common::settings;
 use glam::{DQuat, DVec3};
 
 fn hdri(name: &str) -> PathBuf {
@@ -35,20 +36,6 @@ fn env(name: &str) -> Environment {
 fn renderer() -> Renderer {
     let ctx = Context::new(true, None).expect("a Vulkan 1.3 device with validation (tools/setup installs lavapipe)");
     Renderer::new(ctx).expect("renderer")
-}
-
-fn settings(size: u32, spp: u32, estimator: Estimator) -> Settings {
-    Settings {
-        width: size,
-        height: size,
-        spp,
-        estimator,
-        view: View::Mesh,
-        camera: Camera::default(),
-        light: DVec3::new(0.3, 0.4, 0.866).normalize(),
-        intensity: 1.0,
-        backdrop_blur: 0.0,
-    }
 }
 
 /// Writes the images of a failed comparison for a look.

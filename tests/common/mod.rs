@@ -12,6 +12,22 @@ use std::path::{Path, PathBuf};
 use brdf_shop::brdf::{Lobe, Material, Normalization};
 use glam::DQuat;
 
+/// A square mesh view of `size` pixels with `spp` samples and `estimator`, the default camera and
+/// canvas light, no backdrop blur: the renderer tests' frame.
+pub fn settings(size: u32, spp: u32, estimator: brdf_shop::render::Estimator) -> brdf_shop::render::Settings {
+    brdf_shop::render::Settings {
+        width: size,
+        height: size,
+        spp,
+        estimator,
+        view: brdf_shop::render::View::Mesh,
+        camera: brdf_shop::scene::Camera::default(),
+        light: glam::DVec3::new(0.3, 0.4, 0.866).normalize(),
+        intensity: 1.0,
+        backdrop_blur: 0.0,
+    }
+}
+
 /// A file of the repository's `assets/`, wherever the clone is.
 pub fn asset(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(rel)
