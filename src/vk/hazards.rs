@@ -111,8 +111,9 @@ impl Hazards {
         *p = Pending::default();
     }
 
-    /// Whether any access waits for a barrier.
-    pub fn pending(&self) -> bool {
+    /// Whether any access waits for a barrier (the tests' view of the state).
+    #[cfg(test)]
+    fn pending(&self) -> bool {
         let p = self.state.borrow();
         !p.written.is_empty() || !p.read.is_empty()
     }
