@@ -579,7 +579,7 @@ fn assert_light_ends(lights: &[keylight::KeyLight], set: &keylight::tiles::TileS
 }
 
 /// A lobe that sees the key lights as tiles sees the key and wide lights together as tiles (the
-/// renderer's wide tiles, `Renderer::wide_tiles`), each light cut by its own budget
+/// renderer's wide tiles, `lobe::WIDE_TILES_MIN_SPP`), each light cut by its own budget
 /// (`TILE_BUDGET`): within the same 5 % of the largest exact value as the key lights' own tiles, over
 /// the texels of both (`L − L_res` of the wide lights' residual), on the maps with wide lights, from
 /// the narrowest lobe whose tiles fit in the block to the quadrature threshold of all of them; and

@@ -9,14 +9,14 @@ bool in_cones(vec3 d) {
         || dot(d, g_cone[2].xyz) >= g_cone[2].w || dot(d, g_cone[3].xyz) >= g_cone[3].w;
 }
 
-// The lights' texel toward d: rgb L_key, alpha its set's sample count (fparams.z bright, fparams.w
+// The lights' texel toward d: rgb L_key, alpha its set's sample count (pc.light_counts: bright,
 // dark; the texture's alpha is the pdf over (u, v) within the set, negative for the dark set) times
 // the pdf over solid angle.
 vec4 light_texel(vec3 d) {
     vec2 uv = equirect_uv(d);
     vec4 t = texelFetch(light_tex, min(ivec2(uv * vec2(pc.size.zw)), ivec2(pc.size.zw) - 1), 0);
     float sin_t = sqrt(max(1.0 - d.y * d.y, 0.0));
-    float count = t.a < 0.0 ? pc.fparams.w : pc.fparams.z;
+    float count = t.a < 0.0 ? pc.light_counts.y : pc.light_counts.x;
     return vec4(t.rgb, sin_t > 0.0 ? count * abs(t.a) / (2.0 * PI * PI * sin_t) : 0.0);
 }
 
@@ -269,14 +269,14 @@ vec3 point_range(uint start, uint end, vec3 n, PointView v1, PointView v2) {
 }
 
 // REACH_TEST with tiles: Σ over the lights whose bit `near` holds of their points (light k's rows
-// end at pc.light[k], `lobe::LightSet::ends`, the slots past the last light's where it does). A loop
+// end at pc.ends[k], `lobe::LightSet::ends`, the slots past the last light's where it does). A loop
 // over the lights while points are left (no round for an empty slot), each light's points a loop of
 // their own, which a vector with no lane near that light runs once, masked.
 vec3 near_points(uint near, vec3 n, PointView v1, PointView v2) {
     vec3 sum = vec3(0.0);
     uint start = 0u;
     for (uint k = 0u; start < pc.params.w && k < uint(MAX_LIGHTS); k++) {
-        uint end = uint(pc.light[k]);
+        uint end = pc.ends[k];
         if ((near & (1u << k)) != 0u) {
             uvec2 r = strip_range(k, start, end, v1);
             sum += point_range(r.x, r.y, n, v1, v2);
@@ -377,7 +377,7 @@ void block_points(ivec2 c, GpuLobe l, vec4 q) {
     // runs its body once, masked).
     uint start = 0u;
     for (uint j = 0u; start < pc.params.w && j < uint(MAX_LIGHTS); j++) {
-        uint end = REACH_TEST || ORIENTED_LIGHTS > 0u ? uint(pc.light[j]) : pc.params.w;
+        uint end = REACH_TEST || ORIENTED_LIGHTS > 0u ? pc.ends[j] : pc.params.w;
         if ((near & (1u << j)) != 0u) {
             uvec2 r = strip_range(j, start, end, ov);
             for (uint s = r.x; s < r.y; s++) {

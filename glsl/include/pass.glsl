@@ -20,6 +20,21 @@
 #define PASS_GLSL
 #include "common.glsl"
 
+#ifdef LOBE_PASS
+// The lobe pass's own (`gpu::LobePush`): the frame's first 80 bytes, then the lobe's.
+layout(push_constant) uniform Push {
+    vec4 eye;
+    vec4 right;
+    vec4 up;
+    vec4 forward;
+    uvec4 size;
+    uvec4 params;       // lobe index, samples per lobe N, seed of the frame, points in the light set
+    uint mode;          // where the pass writes (`plan::Output`): 0 accum, 1 rough, 2 cells, 3 cells with the light term per pixel
+    float lod_bias;     // the residual's lod bias (`key`)
+    vec2 light_counts;  // the bright and the dark light-sample set's sample counts
+    uvec4 ends;         // each light's end in the light set (tiles, strips, the reach test)
+} pc;
+#else
 layout(push_constant) uniform Push {
     vec4 eye;      // camera position
     vec4 right;    // camera right · tan(fov/2) · aspect
@@ -27,9 +42,10 @@ layout(push_constant) uniform Push {
     vec4 forward;  // camera forward (unit)
     uvec4 size;    // image W, H; environment W, H
     uvec4 params;  // lobe index, samples per lobe N, first sample of this dispatch, total samples
-    vec4 fparams;  // diffuse rgb (diffuse) | 1/(total samples) (mis) | lod bias, filter mode, light counts (lobe) | 1/σ² (denoise)
-    vec4 light;    // canvas light direction, intensity | each light's end in the light set (lobe, tiles)
+    vec4 fparams;  // diffuse rgb (diffuse) | 1/(total samples) (mis) | 1/σ² (denoise)
+    vec4 light;    // canvas light direction, intensity
 } pc;
+#endif
 
 // The primary ray through the centre of pixel p (the mesh camera, docs/model.md, Frames and conventions).
 vec3 camera_ray(ivec2 p) {

@@ -11,16 +11,13 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context};
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
-
 pub struct AccumulatePass {
     pipeline: Pipeline,
 }
 
 impl AccumulatePass {
     pub fn new(ctx: &Context) -> Result<AccumulatePass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("accumulate.comp"), "accumulate", &BINDINGS, 32, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("accumulate.comp"), "accumulate", 32, &[])?;
         Ok(AccumulatePass { pipeline })
     }
 
@@ -39,9 +36,8 @@ impl AccumulatePass {
             targets.sum.discard_to_general(ctx, cmd, barrier::COMPUTE_READ_WRITE);
         }
         let bindings = [Binding::StorageImageRead(&targets.accum), Binding::StorageImage(&targets.sum)];
-        self.pipeline.check_bindings(&bindings)?;
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        descriptor::write(ctx, set, &bindings);
+        self.pipeline.write_set(ctx, set, &bindings)?;
         let push = [targets.width, targets.height, first as u32, 0, (samples as f32).to_bits(), 0, 0, 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));
         ctx.counts.dispatch();

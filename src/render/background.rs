@@ -11,13 +11,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 4] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    vk::DescriptorType::STORAGE_BUFFER,
-];
-
 pub struct BackgroundPass {
     pipeline: Pipeline,
     /// `background.comp` BLOCKS: over the list of blocks with a pixel off the object.
@@ -27,8 +20,7 @@ pub struct BackgroundPass {
 impl BackgroundPass {
     pub fn new(ctx: &Context) -> Result<BackgroundPass> {
         let variants = [("background", &[0][..]), ("background.blocks", &[1])];
-        let [pipeline, blocks] =
-            Pipeline::compute_variants(ctx, crate::spirv!("background.comp"), &BINDINGS, 128, variants)?;
+        let [pipeline, blocks] = Pipeline::compute_variants(ctx, crate::spirv!("background.comp"), 128, variants)?;
         Ok(BackgroundPass { pipeline, blocks })
     }
 

@@ -1,16 +1,11 @@
 //! The canvas pass (docs/model.md, Frames and conventions): the material on the point-lit unit sphere, written to the
 //! whole accumulation image (alpha 1 on the sphere). The only pass of a canvas view.
 
-use ash::vk;
-
 use super::Recording;
 use crate::vk::descriptor::Binding;
 use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
-
-pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_BUFFER];
 
 pub struct CanvasPass {
     pipeline: Pipeline,
@@ -18,7 +13,7 @@ pub struct CanvasPass {
 
 impl CanvasPass {
     pub fn new(ctx: &Context) -> Result<CanvasPass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("canvas.comp"), "canvas", &BINDINGS, 128, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("canvas.comp"), "canvas", 128, &[])?;
         Ok(CanvasPass { pipeline })
     }
 

@@ -12,17 +12,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 8] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-];
-
 /// Invocations per group of the passes dispatched over the list (their `local_size_x`).
 pub const GROUP: u32 = 64;
 
@@ -66,7 +55,7 @@ pub struct CompactPass {
 impl CompactPass {
     pub fn new(ctx: &Context) -> Result<CompactPass> {
         let variants = [("compact", &[0, 1][..]), ("compact.later", &[1, 1]), ("compact.later.blocks", &[1, 0])];
-        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compact.comp"), &BINDINGS, 128, variants)?;
+        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compact.comp"), 128, variants)?;
         Ok(CompactPass { pipelines })
     }
 

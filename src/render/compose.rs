@@ -14,9 +14,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context, Image};
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 3] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
-
 /// The format of the composed window image.
 pub const WINDOW_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
@@ -82,7 +79,7 @@ pub struct ComposePass {
 impl ComposePass {
     pub fn new(ctx: &Context) -> Result<ComposePass> {
         let variants = [("compose.mesh", &[1][..]), ("compose.canvas", &[2]), ("compose.grey", &[4])];
-        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compose.comp"), &BINDINGS, 96, variants)?;
+        let pipelines = Pipeline::compute_variants(ctx, crate::spirv!("compose.comp"), 96, variants)?;
         Ok(ComposePass { pipelines })
     }
 
@@ -110,11 +107,11 @@ impl ComposePass {
         let bindings =
             [Binding::StorageImage(window), Binding::StorageImageRead(mesh), Binding::StorageImageRead(canvas)];
         // The one set serves every pipeline (below), so it is checked against each.
-        for pipeline in &self.pipelines {
-            pipeline.check_bindings(&bindings)?;
+        for pipeline in &self.pipelines[1..] {
+            descriptor::check(&pipeline.name, &pipeline.declared, &bindings)?;
         }
         let set = descriptor::allocate(ctx, pool, self.pipelines[0].set_layout)?;
-        descriptor::write(ctx, set, &bindings);
+        self.pipelines[0].write_set(ctx, set, &bindings)?;
         let (mx, my) = p.marker.unwrap_or((0.0, 0.0));
         let mut push = ComposePush {
             window_size: [window.width, window.height, p.mesh.2, p.marker.is_some() as u32],

@@ -20,25 +20,12 @@
 //! ([`min_alpha`]), the narrowest of those with their light term at each pixel
 //! ([`pixel_lights`]).
 
-use ash::vk;
-
 use super::Recording;
 use crate::brdf::Lobe;
 use crate::vk::descriptor::Binding;
 use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context};
 use crate::Result;
-
-pub(crate) const BINDINGS: [vk::DescriptorType; 3] = [vk::DescriptorType::STORAGE_IMAGE; 3];
-pub(crate) const SPARSE_BINDINGS: [vk::DescriptorType; 7] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-];
 
 /// The smallest `min(αx, αy)` of a filtered lobe.
 pub const MIN_ALPHA: f64 = 0.2;
@@ -161,9 +148,9 @@ pub struct DenoisePass {
 
 impl DenoisePass {
     pub fn new(ctx: &Context) -> Result<DenoisePass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("denoise.comp"), "denoise", &BINDINGS, 128, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("denoise.comp"), "denoise", 128, &[])?;
         let variants = [("denoise.sparse", &[0][..]), ("denoise.sparse.diffuse", &[1])];
-        match Pipeline::compute_variants(ctx, crate::spirv!("denoise_sparse.comp"), &SPARSE_BINDINGS, 128, variants) {
+        match Pipeline::compute_variants(ctx, crate::spirv!("denoise_sparse.comp"), 128, variants) {
             Ok([sparse, sparse_diffuse]) => Ok(DenoisePass { pipeline, sparse, sparse_diffuse }),
             Err(e) => {
                 pipeline.destroy(ctx);

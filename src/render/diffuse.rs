@@ -1,8 +1,6 @@
 //! Pass 2 (paper §4): the diffuse term `ρ_d/π · E(n)` from the environment's 9 SH coefficients,
 //! added into the accumulation image. Left out when `ρ_d = 0`.
 
-use ash::vk;
-
 use super::environment::GpuEnvironment;
 use super::gpu::Push;
 use super::Recording;
@@ -11,14 +9,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Buffer;
 use crate::vk::Context;
 use crate::Result;
-
-pub(crate) const BINDINGS: [vk::DescriptorType; 5] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-];
 
 /// What the diffuse term reads (`glsl/include/diffuse.glsl`, in this pass and in the G-buffer's,
 /// `CompactPass`): the SH9 coefficients and the key lights' cones (`residual`: the `key` estimator's,
@@ -40,7 +30,7 @@ pub struct DiffusePass {
 
 impl DiffusePass {
     pub fn new(ctx: &Context) -> Result<DiffusePass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("diffuse.comp"), "diffuse", &BINDINGS, 128, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("diffuse.comp"), "diffuse", 128, &[])?;
         Ok(DiffusePass { pipeline })
     }
 

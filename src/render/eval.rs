@@ -11,9 +11,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 3] =
-    [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::STORAGE_BUFFER];
-
 pub struct EvalPass {
     pipeline: Pipeline,
 }
@@ -27,7 +24,7 @@ impl EvalPass {
     /// values, 2 the material buffer, which it may leave unused; push constant `uint count`; 64
     /// invocations a group): how the tests run exported GLSL (`brdf-shop export`) on the device.
     pub fn from_spirv(ctx: &Context, spv: &[u8], name: &str) -> Result<EvalPass> {
-        Ok(EvalPass { pipeline: Pipeline::compute(ctx, spv, name, &BINDINGS, 4, &[])? })
+        Ok(EvalPass { pipeline: Pipeline::compute(ctx, spv, name, 4, &[])? })
     }
 
     /// `f` per pair `(ω_i, ω_o)` (local frame, not necessarily unit: the shader uses them as given).
@@ -48,9 +45,8 @@ impl EvalPass {
             let p = descriptor::pool(ctx, 1, "eval.descriptors")?;
             pool = Some(p);
             let bindings = [Binding::StorageRead(&made[0]), Binding::Storage(&made[1]), Binding::StorageRead(&made[2])];
-            self.pipeline.check_bindings(&bindings)?;
             let set = descriptor::allocate(ctx, p, self.pipeline.set_layout)?;
-            descriptor::write(ctx, set, &bindings);
+            self.pipeline.write_set(ctx, set, &bindings)?;
             ctx.commands.run(&ctx.device, |cmd| {
                 self.pipeline.bind(ctx, cmd, set, &(pairs.len() as u32).to_ne_bytes());
                 ctx.counts.dispatch();

@@ -11,9 +11,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::Context;
 use crate::Result;
 
-/// The pass's descriptor set layout: empty (the vertices and the push constants carry its inputs).
-pub(crate) const BINDINGS: [vk::DescriptorType; 0] = [];
-
 pub struct GBufferPass {
     pipeline: Pipeline,
 }
@@ -24,7 +21,6 @@ impl GBufferPass {
             ctx,
             (crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")),
             "gbuffer",
-            &BINDINGS,
             64,
             VERTEX_STRIDE,
             &[(0, vk::Format::R32G32B32_SFLOAT, 0), (1, vk::Format::R32G32B32_SFLOAT, 12)],

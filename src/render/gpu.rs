@@ -23,6 +23,43 @@ pub struct Push {
 }
 const _: () = assert!(std::mem::size_of::<Push>() == 128);
 
+/// The lobe pass's push constants (`pass.glsl` with `LOBE_PASS`): the frame's camera and sizes,
+/// then the lobe's own.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LobePush {
+    pub eye: [f32; 4],
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub forward: [f32; 4],
+    pub size: [u32; 4],
+    /// The lobe's index, its samples, the frame's seed, the points in its light set.
+    pub params: [u32; 4],
+    /// Where the pass writes: [`crate::render::plan::Output::code`].
+    pub mode: u32,
+    /// The residual's lod bias.
+    pub lod_bias: f32,
+    /// The bright and the dark light-sample set's sample counts.
+    pub light_counts: [f32; 2],
+    /// Each light's end in the light set.
+    pub ends: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<LobePush>() == 128);
+
+impl LobePush {
+    /// The frame's part of `push`, the lobe's zero.
+    pub fn of_frame(push: &Push) -> LobePush {
+        LobePush {
+            eye: push.eye,
+            right: push.right,
+            up: push.up,
+            forward: push.forward,
+            size: push.size,
+            ..LobePush::default()
+        }
+    }
+}
+
 /// `GpuLobe` of `material.glsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

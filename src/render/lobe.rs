@@ -10,8 +10,6 @@ use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
-use ash::vk;
-
 use super::environment::GpuEnvironment;
 use super::Recording;
 use crate::scene::keylight::MAX_LIGHTS;
@@ -23,19 +21,6 @@ use crate::Result;
 mod policy;
 pub use super::plan::variant::{Into, KeyLights, Lookup, Output, Reach, Variant};
 pub use policy::*;
-
-pub(crate) const BINDINGS: [vk::DescriptorType; 10] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::UNIFORM_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_IMAGE,
-];
 
 /// What one lobe pass adds: lobe `index` sampled with the `halton` groups of `samples` samples (a
 /// `key` variant computes the sequence of frame `seed` instead and, with lights, adds the frame's
@@ -203,18 +188,20 @@ impl<'a> Reads<'a> {
 }
 
 /// A lobe pass's push constants: the frame's, with the lobe, its samples, the seed, the light set's
-/// size and sample counts, the lod bias and where the pass writes.
-fn push(mut push: super::gpu::Push, job: &Job<'_>, lights: &LightSet<'_>) -> super::gpu::Push {
+/// size and sample counts, the lod bias, where the pass writes and each light's end in the set.
+fn push(frame: &super::gpu::Push, job: &Job<'_>, lights: &LightSet<'_>) -> super::gpu::LobePush {
     let cells = matches!(job.into, Into::Cells { .. });
     // A block's pixel takes at least one vector of 4 samples (fewer cost as much on llvmpipe):
     // a block of 4 pixels, so 1 sample a pixel on average.
     let samples = if cells { job.samples.max(super::denoise::SPARSE_MIN_SAMPLES) } else { job.samples };
-    push.params = [job.index, samples, job.seed, lights.count];
-    let bias = if job.into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS };
-    push.fparams = [bias, job.into.mode(), lights.counts[0], lights.counts[1]];
-    // `lobe.comp` reads the ends from the canvas light's slot, which it has no use for.
-    push.light = lights.ends.unwrap_or([lights.count; MAX_LIGHTS]).map(|e| e as f32);
-    push
+    super::gpu::LobePush {
+        params: [job.index, samples, job.seed, lights.count],
+        mode: job.into.output().code(),
+        lod_bias: if job.into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS },
+        light_counts: lights.counts,
+        ends: lights.ends.unwrap_or([lights.count; MAX_LIGHTS]),
+        ..super::gpu::LobePush::of_frame(frame)
+    }
 }
 
 fn pipeline_name(v: &Variant) -> String {
@@ -222,15 +209,7 @@ fn pipeline_name(v: &Variant) -> String {
 }
 
 fn build(raw: &ash::Device, cache: ash::vk::PipelineCache, v: &Variant) -> Result<Pipeline> {
-    Pipeline::compute_on(
-        raw,
-        cache,
-        crate::spirv!("lobe.comp"),
-        &pipeline_name(v),
-        &BINDINGS,
-        128,
-        &v.constants().values(),
-    )
+    Pipeline::compute_on(raw, cache, crate::spirv!("lobe.comp"), &pipeline_name(v), 128, &v.constants().values())
 }
 
 fn panicked() -> crate::Error {
@@ -357,7 +336,7 @@ impl LobePass {
                 Binding::StorageImageRead(&t.normal),
                 Binding::StorageImage(match job.into {
                     Into::Accum => &t.accum,
-                    Into::Rough { .. } => &t.rough,
+                    Into::Rough => &t.rough,
                     Into::Cells { .. } => &t.cells,
                 }),
                 // `key` reads its residual within the nearest mip level (`environment::KEY_MIPMAP`).
@@ -376,7 +355,7 @@ impl LobePass {
                 }),
             ],
         )?;
-        rec.dispatch_over(list, pipeline, set, &push(rec.push, job, &reads.lights));
+        rec.dispatch_over(list, pipeline, set, &push(&rec.push, job, &reads.lights));
         Ok(())
     }
 

@@ -2,8 +2,6 @@
 //! between the environment (CDF inversion over `|L| sin θ`) and the material's mixture, balance
 //! heuristic, deterministic QMC. Dispatched in chunks of samples so no dispatch runs long.
 
-use ash::vk;
-
 use super::Recording;
 use crate::vk::descriptor::Binding;
 use crate::vk::pipeline::Pipeline;
@@ -13,25 +11,13 @@ use crate::Result;
 /// Samples per dispatch.
 pub const CHUNK: u32 = 32;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 9] = [
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::STORAGE_IMAGE,
-    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-    vk::DescriptorType::UNIFORM_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-    vk::DescriptorType::STORAGE_BUFFER,
-];
-
 pub struct MisPass {
     pipeline: Pipeline,
 }
 
 impl MisPass {
     pub fn new(ctx: &Context) -> Result<MisPass> {
-        let pipeline = Pipeline::compute(ctx, crate::spirv!("mis.comp"), "mis", &BINDINGS, 128, &[])?;
+        let pipeline = Pipeline::compute(ctx, crate::spirv!("mis.comp"), "mis", 128, &[])?;
         Ok(MisPass { pipeline })
     }
 

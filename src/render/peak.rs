@@ -17,8 +17,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Buffer, Context};
 use crate::Result;
 
-/// The pass's descriptor set layout: binding 0 the output.
-pub(crate) const BINDINGS: [vk::DescriptorType; 1] = [vk::DescriptorType::STORAGE_BUFFER];
 /// Rounds per invocation, and flops per round (`peak.comp`: 4 × 8 `vec4` FMAs, 4 lanes, 2 flops).
 const ITERATIONS: u32 = 128;
 const FLOPS_PER_ROUND: f64 = 256.0;
@@ -56,13 +54,10 @@ impl Scratch {
         };
         let mut scratch = Scratch { out, pool, set: vk::DescriptorSet::null() };
         let bindings = [Binding::Storage(&scratch.out)];
-        match pass
-            .pipeline
-            .check_bindings(&bindings)
-            .and_then(|()| descriptor::allocate(ctx, pool, pass.pipeline.set_layout))
+        match descriptor::allocate(ctx, pool, pass.pipeline.set_layout)
+            .and_then(|set| pass.pipeline.write_set(ctx, set, &bindings).map(|()| set))
         {
             Ok(set) => {
-                descriptor::write(ctx, set, &bindings);
                 scratch.set = set;
                 Ok(scratch)
             }
@@ -83,7 +78,7 @@ impl Scratch {
 
 impl PeakPass {
     pub fn new(ctx: &Context) -> Result<PeakPass> {
-        Ok(PeakPass { pipeline: Pipeline::compute(ctx, crate::spirv!("peak.comp"), "peak", &BINDINGS, 12, &[])? })
+        Ok(PeakPass { pipeline: Pipeline::compute(ctx, crate::spirv!("peak.comp"), "peak", 12, &[])? })
     }
 
     /// GFLOP/s: the median of `repeats` runs of the first dispatch that takes at least 20 ms.

@@ -5,6 +5,7 @@
 use std::cell::RefCell;
 
 use ash::vk;
+use bytemuck::Pod;
 
 use super::environment::GpuEnvironment;
 use super::gpu::{self, Push};
@@ -57,13 +58,12 @@ impl<'a> Recording<'a> {
         self.env.ok_or_else(|| Error::input("render", "a mesh view needs an environment map (--env)"))
     }
 
-    /// A descriptor set of `pipeline`'s layout pointing at `bindings` (checked against the layout
-    /// and its shaders' `readonly`: [`Pipeline::check_bindings`]), whose accesses the dispatches
-    /// that bind it are ordered by.
+    /// A descriptor set of `pipeline`'s layout pointing at `bindings` (checked against its shaders'
+    /// bindings: [`Pipeline::write_set`]), whose accesses the dispatches that bind it are ordered
+    /// by.
     pub fn set(&self, pipeline: &Pipeline, bindings: &[Binding<'_>]) -> Result<vk::DescriptorSet> {
-        pipeline.check_bindings(bindings)?;
         let set = descriptor::allocate(self.ctx, self.pool, pipeline.set_layout)?;
-        descriptor::write(self.ctx, set, bindings);
+        pipeline.write_set(self.ctx, set, bindings)?;
         self.sets.borrow_mut().push((set, hazards::accesses(bindings)));
         Ok(set)
     }
@@ -77,13 +77,13 @@ impl<'a> Recording<'a> {
     }
 
     /// Dispatches 8×8 groups over the image.
-    pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+    pub fn dispatch(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &impl Pod) {
         let (w, h) = (self.targets.width, self.targets.height);
         self.dispatch_groups(pipeline, set, push, (w.div_ceil(8), h.div_ceil(8)));
     }
 
     /// Dispatches `groups` workgroups, after the barrier its conflicts with earlier dispatches need.
-    pub fn dispatch_groups(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push, groups: (u32, u32)) {
+    pub fn dispatch_groups(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &impl Pod, groups: (u32, u32)) {
         self.hazards.before_dispatch(self.ctx, self.cmd, &self.accesses(set, None));
         pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
         self.ctx.counts.dispatch();
@@ -93,12 +93,12 @@ impl<'a> Recording<'a> {
 
     /// Dispatches groups of [`compact::GROUP`] over the targets' list of shaded pixels (as many as
     /// `compact.comp` wrote into its header).
-    pub fn dispatch_listed(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+    pub fn dispatch_listed(&self, pipeline: &Pipeline, set: vk::DescriptorSet, push: &impl Pod) {
         self.dispatch_over(&self.targets.pixels, pipeline, set, push);
     }
 
     /// The same over `list`, the targets' list of pixels or of blocks (`compact.comp` writes both).
-    pub fn dispatch_over(&self, list: &Buffer, pipeline: &Pipeline, set: vk::DescriptorSet, push: &Push) {
+    pub fn dispatch_over(&self, list: &Buffer, pipeline: &Pipeline, set: vk::DescriptorSet, push: &impl Pod) {
         self.hazards.before_dispatch(self.ctx, self.cmd, &self.accesses(set, Some(list)));
         pipeline.bind(self.ctx, self.cmd, set, bytemuck::bytes_of(push));
         self.ctx.counts.dispatch();

@@ -9,16 +9,13 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{barrier, Context, Image};
 use crate::Result;
 
-pub(crate) const BINDINGS: [vk::DescriptorType; 2] =
-    [vk::DescriptorType::STORAGE_IMAGE, vk::DescriptorType::STORAGE_IMAGE];
-
 pub struct ZeroPass {
     pipeline: Pipeline,
 }
 
 impl ZeroPass {
     pub fn new(ctx: &Context) -> Result<ZeroPass> {
-        Ok(ZeroPass { pipeline: Pipeline::compute(ctx, crate::spirv!("zero.comp"), "zero", &BINDINGS, 16, &[])? })
+        Ok(ZeroPass { pipeline: Pipeline::compute(ctx, crate::spirv!("zero.comp"), "zero", 16, &[])? })
     }
 
     /// Zeroes `images` (one or two RGBA32F storage images of one size) in `GENERAL`, ready for the
@@ -39,9 +36,8 @@ impl ZeroPass {
             i.discard_to_general(ctx, cmd, barrier::COMPUTE_WRITE);
         }
         let bindings = [Binding::StorageImage(first), Binding::StorageImage(second.unwrap_or(first))];
-        self.pipeline.check_bindings(&bindings)?;
         let set = descriptor::allocate(ctx, pool, self.pipeline.set_layout)?;
-        descriptor::write(ctx, set, &bindings);
+        self.pipeline.write_set(ctx, set, &bindings)?;
         let (w, h) = (first.width, first.height);
         let push = [w, h, u32::from(second.is_some()), 0];
         self.pipeline.bind(ctx, cmd, set, bytemuck::cast_slice(&push));

@@ -1,39 +1,31 @@
-//! Descriptor set layouts, one pool per renderer, and the writes that point sets at buffers and
-//! images. Bindings are numbered in the order given. [`check`] holds a list of resources to the
-//! layout of the pipeline whose set it is written to, before it is written.
+//! Descriptor set layouts (made from the shaders' bindings, `reflect::layout`), one pool per
+//! renderer, and the writes that point sets at buffers and images: a pass lists one resource per
+//! binding, in the order of the binding numbers. [`check`] holds such a list to the layout of the
+//! pipeline whose set it is written to, before it is written.
 
 use ash::vk;
 
 use super::{vk_err, Buffer, Context, Image};
 use crate::error::{Error, Result};
 
-/// A set layout with bindings `0..types.len()` of the given types, visible to `stages`.
-pub fn layout(
-    ctx: &Context,
-    types: &[vk::DescriptorType],
-    stages: vk::ShaderStageFlags,
-    name: &str,
-) -> Result<vk::DescriptorSetLayout> {
-    let l = layout_on(ctx.raw(), types, stages)?;
-    ctx.device.set_name(l, name);
-    Ok(l)
-}
-
-/// [`layout`] through a device handle alone (a pipeline built on another thread), unnamed.
+/// The set layout of `declared` (binding `i` of type `declared[i]`, one descriptor, none where
+/// it is `None`), visible to `stages`, unnamed (a pipeline names it, [`super::pipeline::Pipeline::name`]).
 pub fn layout_on(
     raw: &ash::Device,
-    types: &[vk::DescriptorType],
+    declared: &[Option<Declared>],
     stages: vk::ShaderStageFlags,
 ) -> Result<vk::DescriptorSetLayout> {
-    let bindings: Vec<_> = types
+    let bindings: Vec<_> = declared
         .iter()
         .enumerate()
-        .map(|(i, &t)| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(i as u32)
-                .descriptor_type(t)
-                .descriptor_count(1)
-                .stage_flags(stages)
+        .filter_map(|(i, d)| {
+            d.map(|d| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(d.ty)
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
         })
         .collect();
     let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
@@ -83,8 +75,10 @@ pub enum Binding<'a> {
     Sampled(&'a Image, vk::Sampler),
 }
 
-/// Points bindings `0..bindings.len()` of `set` at the given resources.
-pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
+/// Points the bindings of `set` (whose layout is `declared`) at the given resources: binding `i`
+/// at `bindings[i]`, except where the layout has no binding `i` (a resource compiled out of the
+/// shader), which is left out.
+pub fn write(ctx: &Context, set: vk::DescriptorSet, declared: &[Option<Declared>], bindings: &[Binding<'_>]) {
     let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
         .iter()
         .map(|b| match b {
@@ -109,6 +103,7 @@ pub fn write(ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) {
     let writes: Vec<vk::WriteDescriptorSet> = bindings
         .iter()
         .enumerate()
+        .filter(|(i, _)| declared.get(*i).is_some_and(Option::is_some))
         .map(|(i, b)| {
             let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32);
             let w = w.descriptor_type(b.ty());
@@ -141,45 +136,48 @@ impl Binding<'_> {
     }
 }
 
-/// One binding of a pipeline's set: the type its pass declares, and whether its shaders may write
-/// it (a storage resource not `readonly` in some stage: `reflect::check_layout`).
+/// One binding of a pipeline's set: its type, and whether its shaders may write it (a storage
+/// resource not `readonly` in some stage), as `reflect::layout` reads them from the shaders.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Declared {
     pub ty: vk::DescriptorType,
     pub writable: bool,
 }
 
-/// Checks `bindings`, about to be written to a set of pipeline `pipeline` whose bindings are
-/// `declared`: as many bindings, each of its declared type, and none passed read-only where the
-/// shader may write it (`vk::hazards` orders later dispatches after declared writes alone, so such
-/// a write would go without its barrier). A mismatch is a bug in the program ([`Error::Bug`]); the
-/// error names the pipeline, each binding concerned, what was declared and what was written.
-pub fn check(pipeline: &str, declared: &[Declared], bindings: &[Binding<'_>]) -> Result<()> {
+/// Checks `bindings`, about to be written to a set of pipeline `pipeline` whose layout is
+/// `declared`: a resource for each binding of the layout, each of its type, and none passed
+/// read-only where the shader may write it (`vk::hazards` orders later dispatches after declared
+/// writes alone, so such a write would go without its barrier). Resources at numbers the layout
+/// lacks are allowed (compiled out of the shader; [`write`] leaves them out). A mismatch is a bug in
+/// the program ([`Error::Bug`]); the error names the pipeline, each binding concerned, what the
+/// shader has and what was written.
+pub fn check(pipeline: &str, declared: &[Option<Declared>], bindings: &[Binding<'_>]) -> Result<()> {
     check_written(pipeline, declared, bindings.iter().map(|b| (b.ty(), b.read_only())))
 }
 
 /// [`check`] on what each binding is written as: its type, and whether it is passed read-only.
 fn check_written(
     pipeline: &str,
-    declared: &[Declared],
+    declared: &[Option<Declared>],
     written: impl ExactSizeIterator<Item = (vk::DescriptorType, bool)>,
 ) -> Result<()> {
     let mut problems = Vec::new();
-    if written.len() != declared.len() {
-        problems.push(format!("{} bindings written, the layout declares {}", written.len(), declared.len()));
+    if written.len() < declared.len() {
+        problems.push(format!("{} bindings written, the shader has {}", written.len(), declared.len()));
     }
     for (i, ((ty, read_only), d)) in written.zip(declared).enumerate() {
+        let Some(d) = d else { continue };
         if ty != d.ty {
-            problems.push(format!("binding {i}: declared {:?}, written {ty:?}", d.ty));
+            problems.push(format!("binding {i}: the shader has {:?}, written {ty:?}", d.ty));
         } else if read_only && d.writable {
-            problems.push(format!("binding {i}: declared {ty:?}, written read-only, but the shader may write it"));
+            problems.push(format!("binding {i}: {ty:?} written read-only, but the shader may write it"));
         }
     }
     if problems.is_empty() {
         return Ok(());
     }
     Err(Error::Bug(format!(
-        "pipeline `{pipeline}`: the resources written to its set do not match its layout: {}",
+        "pipeline `{pipeline}`: the resources written to its set do not match its shader: {}",
         problems.join("; ")
     )))
 }

@@ -132,10 +132,8 @@ mod tests {
     /// reported.
     fn write_then_read(dependent: bool, derive: bool) -> (u64, crate::Result<()>) {
         let ctx = Context::new(true, None).expect("a Vulkan 1.3 device with validation (tools/setup)");
-        let zero = crate::render::zero::BINDINGS;
-        let zero = Pipeline::compute(&ctx, crate::spirv!("zero.comp"), "zero", &zero, 16, &[]).unwrap();
-        let add = crate::render::accumulate::BINDINGS;
-        let add = Pipeline::compute(&ctx, crate::spirv!("accumulate.comp"), "add", &add, 32, &[]).unwrap();
+        let zero = Pipeline::compute(&ctx, crate::spirv!("zero.comp"), "zero", 16, &[]).unwrap();
+        let add = Pipeline::compute(&ctx, crate::spirv!("accumulate.comp"), "add", 32, &[]).unwrap();
         let (usage, fmt) = (vk::ImageUsageFlags::STORAGE, vk::Format::R32G32B32A32_SFLOAT);
         let images: Vec<Image> =
             ["a", "b", "c"].iter().map(|n| Image::new(&ctx, (8, 8), fmt, 1, usage, n).unwrap()).collect();
@@ -158,9 +156,8 @@ mod tests {
                     ),
                 ];
                 for (pipeline, binds, push) in &steps {
-                    pipeline.check_bindings(binds)?;
                     let set = descriptor::allocate(&ctx, pool, pipeline.set_layout)?;
-                    descriptor::write(&ctx, set, binds);
+                    pipeline.write_set(&ctx, set, binds)?;
                     if derive {
                         hazards.before_dispatch(&ctx, cmd, &accesses(binds));
                     }

@@ -1,9 +1,8 @@
 //! Pipelines with their layout and their one descriptor set layout: compute pipelines with
 //! specialisation constants (ids `0..n`, all `u32`), and the rasterising pipeline of the G-buffer
-//! (dynamic rendering, no render-pass objects). Each is made only once its declared bindings are
-//! checked against its shaders' ([`reflect::check_layout`]); it keeps them, with which ones its
-//! shaders may write, to check each list of resources written to one of its sets
-//! ([`Pipeline::check_bindings`]).
+//! (dynamic rendering, no render-pass objects). Each one's set layout is made from its shaders'
+//! bindings ([`reflect::layout`]); it keeps them, with which ones its shaders may write, to check
+//! each list of resources written to one of its sets ([`Pipeline::write_set`]).
 
 use ash::vk;
 
@@ -17,25 +16,20 @@ pub struct Pipeline {
     pub set_layout: vk::DescriptorSetLayout,
     pub bind_point: vk::PipelineBindPoint,
     pub push_stages: vk::ShaderStageFlags,
-    /// The name it was made with, for the errors of [`Pipeline::check_bindings`].
+    /// The name it was made with, for the errors of [`Pipeline::write_set`].
     pub name: String,
-    /// Its set's bindings as its pass declares them, with which ones its shaders may write.
-    pub declared: Vec<Declared>,
-}
-
-/// The declared `types` with the `writable` flags [`reflect::check_layout`] returns for them.
-fn declared(types: &[vk::DescriptorType], writable: Vec<bool>) -> Vec<Declared> {
-    types.iter().zip(writable).map(|(&ty, writable)| Declared { ty, writable }).collect()
+    /// Its set's bindings as its shaders declare them ([`reflect::layout`]).
+    pub declared: Vec<Option<Declared>>,
 }
 
 /// The set layout and pipeline layout, unnamed (see [`Pipeline::name`]).
 fn layouts(
     raw: &ash::Device,
-    bindings: &[vk::DescriptorType],
+    declared: &[Option<Declared>],
     stages: vk::ShaderStageFlags,
     push_size: u32,
 ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
-    let set_layout = descriptor::layout_on(raw, bindings, stages)?;
+    let set_layout = descriptor::layout_on(raw, declared, stages)?;
     let set_layouts = [set_layout];
     let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
     let info = vk::PipelineLayoutCreateInfo::default()
@@ -70,18 +64,10 @@ fn finish(
 }
 
 impl Pipeline {
-    /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`, with binding `i`
-    /// of its one set of type `bindings[i]` (checked against the shader's bindings: an error names
-    /// any mismatch).
-    pub fn compute(
-        ctx: &Context,
-        spv: &[u8],
-        name: &str,
-        bindings: &[vk::DescriptorType],
-        push_size: u32,
-        spec: &[u32],
-    ) -> Result<Pipeline> {
-        let p = Pipeline::compute_on(ctx.raw(), ctx.pipeline_cache.raw, spv, name, bindings, push_size, spec)?;
+    /// A compute pipeline from `spv` whose specialisation constant `i` is `spec[i]`, its one set's
+    /// layout the shader's bindings.
+    pub fn compute(ctx: &Context, spv: &[u8], name: &str, push_size: u32, spec: &[u32]) -> Result<Pipeline> {
+        let p = Pipeline::compute_on(ctx.raw(), ctx.pipeline_cache.raw, spv, name, push_size, spec)?;
         p.name(ctx, name);
         Ok(p)
     }
@@ -91,13 +77,12 @@ impl Pipeline {
     pub fn compute_variants<const N: usize>(
         ctx: &Context,
         spv: &[u8],
-        bindings: &[vk::DescriptorType],
         push_size: u32,
         variants: [(&str, &[u32]); N],
     ) -> Result<[Pipeline; N]> {
         let mut made = Vec::with_capacity(N);
         for (name, spec) in variants {
-            match Pipeline::compute(ctx, spv, name, bindings, push_size, spec) {
+            match Pipeline::compute(ctx, spv, name, push_size, spec) {
                 Ok(p) => made.push(p),
                 Err(e) => {
                     for p in made {
@@ -121,14 +106,13 @@ impl Pipeline {
         cache: vk::PipelineCache,
         spv: &[u8],
         name: &str,
-        bindings: &[vk::DescriptorType],
         push_size: u32,
         spec: &[u32],
     ) -> Result<Pipeline> {
-        let writable = reflect::check_layout(name, &[spv], bindings)?;
+        let declared = reflect::layout(name, &[spv])?;
         let stages = vk::ShaderStageFlags::COMPUTE;
         let module = shader::module_on(raw, spv, name)?;
-        let (set_layout, layout) = match layouts(raw, bindings, stages, push_size) {
+        let (set_layout, layout) = match layouts(raw, &declared, stages, push_size) {
             Ok(l) => l,
             Err(e) => {
                 // SAFETY: unused.
@@ -159,7 +143,7 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_stages: stages,
             name: name.to_string(),
-            declared: declared(bindings, writable),
+            declared,
         };
         finish(raw, created, p, "vkCreateComputePipelines")
     }
@@ -178,14 +162,13 @@ impl Pipeline {
         ctx: &Context,
         (vert, frag): (&[u8], &[u8]),
         name: &str,
-        bindings: &[vk::DescriptorType],
         push_size: u32,
         stride: u32,
         attributes: &[(u32, vk::Format, u32)],
         colors: &[vk::Format],
         depth: vk::Format,
     ) -> Result<Pipeline> {
-        let writable = reflect::check_layout(name, &[vert, frag], bindings)?;
+        let declared = reflect::layout(name, &[vert, frag])?;
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let vs = shader::module(ctx, vert, &format!("{name}.vert"))?;
         let fs = match shader::module(ctx, frag, &format!("{name}.frag")) {
@@ -203,7 +186,7 @@ impl Pipeline {
                 ctx.raw().destroy_shader_module(fs, None);
             }
         };
-        let (set_layout, layout) = match layouts(ctx.raw(), bindings, stages, push_size) {
+        let (set_layout, layout) = match layouts(ctx.raw(), &declared, stages, push_size) {
             Ok(l) => l,
             Err(e) => {
                 destroy_modules();
@@ -277,17 +260,19 @@ impl Pipeline {
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_stages: stages,
             name: name.to_string(),
-            declared: declared(bindings, writable),
+            declared,
         };
         let p = finish(ctx.raw(), created, p, "vkCreateGraphicsPipelines")?;
         p.name(ctx, name);
         Ok(p)
     }
 
-    /// Checks `bindings`, about to be written to a set of this pipeline's layout, against its
-    /// declared bindings and its shaders' `readonly` ([`descriptor::check`]).
-    pub fn check_bindings(&self, bindings: &[Binding<'_>]) -> Result<()> {
-        descriptor::check(&self.name, &self.declared, bindings)
+    /// Points `set`, of this pipeline's set layout, at `bindings` (binding `i` at `bindings[i]`),
+    /// once they are checked against its shaders' bindings ([`descriptor::check`]).
+    pub fn write_set(&self, ctx: &Context, set: vk::DescriptorSet, bindings: &[Binding<'_>]) -> Result<()> {
+        descriptor::check(&self.name, &self.declared, bindings)?;
+        descriptor::write(ctx, set, &self.declared, bindings);
+        Ok(())
     }
 
     /// Binds the pipeline, its descriptor set and the push constants.

@@ -1,13 +1,11 @@
-//! The descriptor bindings a SPIR-V module declares, and the check that a pipeline's set layout
-//! matches them. A pass declares its layout as `[vk::DescriptorType; N]` (binding `i` of set 0 has
-//! type `i`, one descriptor each: [`super::descriptor::layout_on`]); its GLSL numbers the same
-//! bindings with `layout(binding = i)`. [`check_layout`] compares the two when a pipeline is made,
-//! so a declaration out of step with its shader fails there, named, instead of reading the wrong
-//! resource on the GPU (which the validation layer reports only when it runs).
-//!
-//! [`check_layout`] also returns which declared bindings the shaders may write (a storage resource
-//! not `readonly`): what [`super::descriptor::check`] holds the bindings a pass passes read-only
-//! to, each time it writes a set.
+//! The descriptor bindings a SPIR-V module declares, and the set layout a pipeline makes of them.
+//! A pass's GLSL is the one place its bindings are declared (`layout(binding = i)`, the type, and
+//! `readonly` for what it only reads): [`layout`] reads them from the compiled shaders when the
+//! pipeline is made, so the descriptor set layout cannot fall out of step with the shader. The
+//! pass names each binding's resource once, when it writes a set (`descriptor::Binding`, read-only
+//! or writable), and [`super::descriptor::check`] holds that list to the layout: the type of each
+//! binding, and no resource passed read-only where the shader may write it (the derived barriers,
+//! `vk::hazards`, follow what the list says).
 //!
 //! This module reads the few instructions it needs itself (names, `OpSource`, `OpDecorate`,
 //! `OpMemberDecorate`, the image, sampler, array, struct and pointer types, constants and
@@ -22,10 +20,9 @@
 //! which removes every resource that no code reads, and keeps the resources that only a
 //! specialisation constant's branch reads (the constant is unknown when compiling). So a module's
 //! bindings are those some specialisation of it may use; a binding the GLSL declares and never
-//! reads is absent. Hence the rule of [`check_layout`]: every binding in the module must be
-//! declared, at its number, with its type; the layout may declare bindings the module lacks (a
-//! resource compiled out, or, for `EvalPass::from_spirv`, an exported shader that reads no
-//! material buffer).
+//! reads is absent. A pass's list may name resources at bindings its layout lacks (a resource
+//! compiled out, or, for `EvalPass::from_spirv`, an exported shader that reads no material
+//! buffer): they are not written.
 //!
 //! Owns no Vulkan object and calls no Vulkan function.
 
@@ -34,6 +31,7 @@ use std::collections::{HashMap, HashSet};
 use ash::vk;
 use spirv::{Decoration, Dim, Op, StorageClass};
 
+use super::descriptor::Declared;
 use crate::error::{Error, Result};
 
 /// One descriptor binding of a shader module.
@@ -83,59 +81,48 @@ pub fn reflect(spv: &[u8]) -> std::result::Result<Reflection, Malformed> {
     Ok(Reflection { source, bindings })
 }
 
-/// Checks the set layout `declared` of pipeline `pipeline` (binding `i` of set 0 has type
-/// `declared[i]`, one descriptor) against the bindings of its shader `modules`: each binding a
-/// module holds must be in set 0, declared at its number with its type, and a single descriptor.
-/// Declared bindings that no module holds are allowed (see the module note). A mismatch, or a
-/// module this cannot read, is a bug in the program ([`Error::Bug`]); the error names the pipeline,
-/// the shader file, the binding and both types.
-///
-/// Returns, for each declared binding, whether some module may write it
-/// ([`ShaderBinding::writable`]; false for a binding no module holds).
-pub fn check_layout(pipeline: &str, modules: &[&[u8]], declared: &[vk::DescriptorType]) -> Result<Vec<bool>> {
+/// The set layout of pipeline `pipeline`, made from the bindings of its shader `modules`: entry
+/// `i` is binding `i` of set 0, with its type and whether some module may write it
+/// ([`ShaderBinding::writable`]), or `None` where no module holds binding `i` (a resource compiled
+/// out, see the module note). Each binding must be in set 0 and a single descriptor, and modules
+/// that share a binding must give it one type; otherwise, or for a module this cannot read, the
+/// error is a bug in the program ([`Error::Bug`]) that names the pipeline, the shader file and the
+/// binding.
+pub fn layout(pipeline: &str, modules: &[&[u8]]) -> Result<Vec<Option<Declared>>> {
     let mut problems = Vec::new();
-    let mut writable = vec![false; declared.len()];
+    let mut layout: Vec<Option<Declared>> = Vec::new();
     for spv in modules {
         let found = reflect(spv)
             .map_err(|e| Error::Bug(format!("pipeline `{pipeline}`: its SPIR-V cannot be reflected: {e}")))?;
         let shader = found.source.as_deref().unwrap_or(pipeline);
         for b in &found.bindings {
-            if let Some(problem) = mismatch(b, declared) {
-                let name = if b.name.is_empty() { String::new() } else { format!(" (`{}`)", b.name) };
-                problems.push(format!("shader {shader}, binding {}{name}: {problem}", b.binding));
-            } else if b.writable {
-                writable[b.binding as usize] = true;
+            let name = if b.name.is_empty() { String::new() } else { format!(" (`{}`)", b.name) };
+            let at = format!("shader {shader}, binding {}{name}", b.binding);
+            if b.set != 0 {
+                problems.push(format!("{at}: in set {}, a pipeline has set 0 alone", b.set));
+                continue;
+            }
+            if b.count != 1 {
+                problems.push(format!("{at}: an array of {} descriptors, a binding holds one", b.count));
+                continue;
+            }
+            let i = b.binding as usize;
+            if layout.len() <= i {
+                layout.resize(i + 1, None);
+            }
+            match &mut layout[i] {
+                Some(d) if d.ty != b.ty => {
+                    problems.push(format!("{at}: {:?} here, {:?} in another stage", b.ty, d.ty));
+                }
+                Some(d) => d.writable |= b.writable,
+                slot => *slot = Some(Declared { ty: b.ty, writable: b.writable }),
             }
         }
     }
     if problems.is_empty() {
-        return Ok(writable);
+        return Ok(layout);
     }
-    Err(Error::Bug(format!(
-        "pipeline `{pipeline}`: its descriptor set layout does not match its shader: {}",
-        problems.join("; ")
-    )))
-}
-
-/// What is wrong with the shader's binding `b` under the declaration, if anything.
-fn mismatch(b: &ShaderBinding, declared: &[vk::DescriptorType]) -> Option<String> {
-    if b.set != 0 {
-        return Some(format!("in set {}, the layout has set 0 alone", b.set));
-    }
-    match declared.get(b.binding as usize) {
-        None => Some(format!("the shader has {:?}, the layout declares none ({} bindings)", b.ty, declared.len())),
-        Some(&d) if !same_type(d, b.ty) => Some(format!("declared {d:?}, the shader has {:?}", b.ty)),
-        Some(_) if b.count != 1 => Some(format!("the shader has an array of {} descriptors, the layout one", b.count)),
-        Some(_) => None,
-    }
-}
-
-/// Whether a binding declared `declared` serves a shader resource of type `found`: the same type,
-/// or the dynamic-offset form of its buffer type (which a shader cannot tell apart).
-fn same_type(declared: vk::DescriptorType, found: vk::DescriptorType) -> bool {
-    declared == found
-        || (declared, found) == (vk::DescriptorType::UNIFORM_BUFFER_DYNAMIC, vk::DescriptorType::UNIFORM_BUFFER)
-        || (declared, found) == (vk::DescriptorType::STORAGE_BUFFER_DYNAMIC, vk::DescriptorType::STORAGE_BUFFER)
+    Err(Error::Bug(format!("pipeline `{pipeline}`: its shaders' bindings make no set layout: {}", problems.join("; "))))
 }
 
 /// The last component of a `/` or `\` separated path.

@@ -10,7 +10,7 @@ use crate::scene::keylight::KeyLight;
 pub const REACH: f64 = 5.0;
 
 /// The fewest samples of a frame whose lobes that see the key lights as points or tiles (but the
-/// wide lights not as points) see the key and wide lights as tiles together (`Renderer::wide_tiles`).
+/// wide lights not as points) see the key and wide lights as tiles together.
 /// Their points cost the same at any sample count and take the wide lights' share of the residual's
 /// noise, which the samples would otherwise have to: from 16 samples on, the sweep's studio lobes
 /// (the softbox beside the lamp) reach a lower error at equal time with them, while below 16 their

@@ -74,11 +74,11 @@ pub fn choose(r: &Request, sparse: bool, p: &mut Plan) -> Vec<LobeStep> {
         // Where the pass writes: the rough lobes the filter takes, sampled once a 2 × 2 block in
         // sparse frames.
         let mis_lights = matches!(variant.lights, KeyLights::Samples { .. });
-        let filtered = r.options.denoise && variant.key() && denoise::fits(l, mis_lights, floor);
+        let filtered = variant.key() && denoise::fits(l, mis_lights, floor);
         let into = match (filtered, sparse) {
             (false, _) => Into::Accum,
             (true, true) => Into::Cells { pixel_lights: denoise::pixel_lights(l, r.width, r.height) },
-            (true, false) => Into::Rough { strata: r.options.stratified_shifts },
+            (true, false) => Into::Rough,
         };
         // The editor's stand-in (`LobePass::ready`) covers every lobe that may leave `Accum`.
         debug_assert!(into == Into::Accum || variant.outputs_vary(), "{variant:?} writes {into:?}");
@@ -101,16 +101,16 @@ fn key_lights(r: &Request, l: &Lobe, base: Variant, k: &KeyLightSet) -> (Variant
     let whole = fits(&k.lights);
     let pays = lobe::reach_test_pays(r.material, l);
     let reach = pays.then(|| lobe::reach_half_angles(r.material.normalization, l));
-    let wide_lights = k.wide.as_ref().filter(|_| r.options.wide_lights);
+    let wide_lights = k.wide.as_ref();
     // A lobe that sees the wide lights as points too takes them off its residual.
     let mut wide = whole && wide_lights.is_some_and(|w| fits(&w.lights));
     let mut tile_set = None;
-    if !wide && r.options.light_tiles {
-        let cut = Cutter::new(r, l, base, k);
+    if !wide {
+        let cut = Cutter::new(l, base, k);
         // The key and wide lights together first (also for a lobe that sees the key lights as
         // points: those are then their own one tile), where the reach test (if it pays) sees them
         // all; their tiles take the wide lights off the residual.
-        let wide_tiles = r.options.wide_tiles && r.spp >= lobe::WIDE_TILES_MIN_SPP;
+        let wide_tiles = r.spp >= lobe::WIDE_TILES_MIN_SPP;
         let tested = |w: &&WideLightSet| !pays || w.reach_testable();
         if let Some(w) = wide_lights.filter(|w| wide_tiles && tested(w)) {
             tile_set = cut.cut(max_points(&w.all, reach), TileLights::KeyAndWide);
@@ -119,9 +119,7 @@ fn key_lights(r: &Request, l: &Lobe, base: Variant, k: &KeyLightSet) -> (Variant
         // tiles within their own allowance, and four points for each wide light (the allowance of
         // the key and wide lights together, which counts the wide lights' share of the pixels in
         // reach, would be smaller).
-        let wide_points = |w: &&WideLightSet| {
-            r.options.wide_tiles && tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, r.spp)
-        };
+        let wide_points = |w: &&WideLightSet| tested(w) && lobe::sees_wide_lights_as_points(l, &w.lights, r.spp);
         let key_points = max_points(&k.lights, reach);
         if let Some(w) = wide_lights.filter(|w| tile_set.is_none() && wide_points(w)) {
             tile_set = cut.cut(key_points + 4 * w.lights.len(), TileLights::KeyAndWidePoints);
@@ -162,11 +160,10 @@ struct Cutter<'a> {
 }
 
 impl<'a> Cutter<'a> {
-    fn new(r: &Request, l: &Lobe, base: Variant, lights: &'a KeyLightSet) -> Cutter<'a> {
+    fn new(l: &Lobe, base: Variant, lights: &'a KeyLightSet) -> Cutter<'a> {
         let round = Cut::Tiles(tile_alpha(l.alpha_x, l.alpha_y));
         let (narrow, broad) = (l.alpha_x.min(l.alpha_y), l.alpha_x.max(l.alpha_y));
-        let streak = (r.options.light_strips && !(base.shape.split || base.sym) && narrow < broad)
-            .then_some(Cut::Strips(narrow, broad));
+        let streak = (!(base.shape.split || base.sym) && narrow < broad).then_some(Cut::Strips(narrow, broad));
         Cutter { lights, round, streak }
     }
 

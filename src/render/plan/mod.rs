@@ -37,26 +37,6 @@ pub struct Options {
     /// Let the `key` lobe passes of narrow lobes skip the key lights at pixels whose lobe cannot
     /// reach them (`lobe::reach_test_pays`); the image is the same either way.
     pub light_reach_test: bool,
-    /// Let lobes that see every key and wide light as points or tiles take the wide lights off
-    /// their residual map (`keylight::WideLights`).
-    pub wide_lights: bool,
-    /// Let lobes too narrow for the lights' own points see them as tiles (`keylight::tiles`).
-    pub light_tiles: bool,
-    /// Let anisotropic lobes of one component see the lights as strips across their narrow axis
-    /// (`keylight::strips`) where those run fewer points a pixel than round tiles.
-    pub light_strips: bool,
-    /// Let lobes take the key and wide lights as tiles together in frames of at least
-    /// [`lobe::WIDE_TILES_MIN_SPP`] samples, and otherwise the wide lights as their own points where
-    /// [`lobe::sees_wide_lights_as_points`] admits it.
-    pub wide_tiles: bool,
-    /// Let the rough `key` lobes go through the normal-weighted filter (`denoise`).
-    pub denoise: bool,
-    /// Stratify the per-pixel shifts of a dense filtered lobe pass of up to 4 samples over the
-    /// filter's window (`glsl/lobe.comp`); false takes a hash per pixel at every count.
-    pub stratified_shifts: bool,
-    /// Let frames of up to [`denoise::SPARSE_MAX_SPP`] samples sample the filtered lobes once per
-    /// 2 × 2 block of pixels (`denoise::sparse`).
-    pub sparse_filter: bool,
     /// Draw every lobe pass with the pipeline of every output (`lobe::Output::Any`): the editor's
     /// stand-in while a view's own pipeline is built.
     pub any_output_lobes: bool,
@@ -64,19 +44,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Options {
-        Options {
-            scalar_lobes: false,
-            cull_hidden_faces: true,
-            light_reach_test: true,
-            wide_lights: true,
-            light_tiles: true,
-            light_strips: true,
-            wide_tiles: true,
-            denoise: true,
-            stratified_shifts: true,
-            sparse_filter: true,
-            any_output_lobes: false,
-        }
+        Options { scalar_lobes: false, cull_hidden_faces: true, light_reach_test: true, any_output_lobes: false }
     }
 }
 
@@ -242,7 +210,7 @@ pub fn plan(r: &Request) -> Plan {
         p.run(Pass::Canvas, "the canvas view: the material under the canvas light, evaluated exactly");
         return p;
     }
-    p.sparse = r.options.sparse_filter && denoise::sparse(r.spp, r.width, r.height);
+    p.sparse = denoise::sparse(r.spp, r.width, r.height);
     let lobes = if r.estimator == Estimator::Mis { Vec::new() } else { lobes::choose(r, p.sparse, &mut p) };
     if lobes.iter().any(|l| matches!(l.variant.lights, variant::KeyLights::Samples { .. })) {
         p.light_samples = Some(key_light_samples(r.spp));

@@ -60,7 +60,7 @@ impl Step {
             Pass::Zero { images: LobeImages::Cells, .. } => "the sparse filter's cells",
             Pass::Zero { images: LobeImages::Rough, .. } => "the dense filter's input",
             Pass::Lobe(LobeStep { into: Into::Accum, .. }) => "the image (adds)",
-            Pass::Lobe(LobeStep { into: Into::Rough { .. }, .. }) => "the dense filter's input (adds)",
+            Pass::Lobe(LobeStep { into: Into::Rough, .. }) => "the dense filter's input (adds)",
             Pass::Lobe(LobeStep { into: Into::Cells { pixel_lights: true }, .. }) => {
                 "the sparse filter's cells (adds), the light term into the image"
             }

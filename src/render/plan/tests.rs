@@ -201,8 +201,8 @@ fn dense_key_frames_filter_rough_lobes_per_pixel() {
             matches!(p.steps[4].pass, Pass::Denoise { min_alpha, sparse: false, diffuse: None } if min_alpha == 0.5)
         );
     }
-    let off = Ask { options: Options { denoise: false, ..Options::default() }, ..Ask::new(Estimator::Key, 48, 4) };
-    let p = off.plan(&m, None);
+    let sharp = material(0.2, vec![lobe(0.3, 0.01)]);
+    let p = Ask::new(Estimator::Key, 48, 4).plan(&sharp, None);
     assert_eq!(left(&p, "zero, denoise").as_deref(), Some("no lobe is rough enough for the filter"));
     assert_eq!(
         left(&Ask::new(Estimator::Fis, 48, 4).plan(&m, None), "zero, denoise").as_deref(),
@@ -232,13 +232,11 @@ fn key_lobes_see_the_lights_as_points_tiles_or_samples_by_their_width() {
     assert!(matches!(lobes[1].lights, LobeLights::Tiles(_)), "{:?}", lobes[1].lights);
     assert!(lobes[1].variant.points() && lobes[1].variant.reach() != Reach::Untested);
     assert!(p.light_samples.is_none());
-    // Without tiles it takes MIS light samples, which the frame draws.
-    let untiled =
-        Ask { options: Options { light_tiles: false, ..Options::default() }, ..Ask::new(Estimator::Key, 32, 8) };
-    let p = untiled.plan(&m, Some(&lights));
-    let sharp = p.lobes().nth(1).expect("two lobe passes");
-    assert_eq!(sharp.lights, LobeLights::Samples);
-    assert!(matches!(sharp.variant.lights, KeyLights::Samples { reach: Reach::Tested { .. } }));
+    // A lobe too narrow for tiles within its allowance takes MIS light samples, which the frame draws.
+    let p = Ask::new(Estimator::Key, 32, 8).plan(&material(0.0, vec![lobe(0.3, 0.0005)]), Some(&lights));
+    let sharpest = p.lobes().next().expect("a lobe pass");
+    assert_eq!(sharpest.lights, LobeLights::Samples);
+    assert!(matches!(sharpest.variant.lights, KeyLights::Samples { reach: Reach::Tested { .. } }));
     assert_eq!(p.light_samples, Some(8));
     // The reach test is the options' to turn off, never the image's.
     let unreached =

@@ -104,9 +104,8 @@ pub enum Into {
     Accum,
     /// `Targets::rough` (cleared to unmarked zeros before the frame's first such pass), for the
     /// filter (`denoise`), with the set shifted per pixel: up to `lobe.comp`'s `FEW_SAMPLES` (4)
-    /// stratified over the filter's window (`strata`), else by a hash per pixel (`strata` false:
-    /// always by the hash; a test compares the two).
-    Rough { strata: bool },
+    /// stratified over the filter's window, else by a hash per pixel.
+    Rough,
     /// `Targets::cells`, one sample set per 2 × 2 block, its light term with it (`denoise::sparse`):
     /// the pass runs over the blocks' list, at their first shaded pixel, the shifts stratified over
     /// the sparse filter's window of 3 × 3 blocks. `pixel_lights`: the light term is taken at each
@@ -115,28 +114,28 @@ pub enum Into {
     Cells { pixel_lights: bool },
 }
 
+impl Output {
+    /// `lobe.comp`'s number for it: its `OUTPUT` constant and, for [`Output::Any`]'s pipeline, the
+    /// push constant `mode` (which is then 0 to 3).
+    pub fn code(self) -> u32 {
+        match self {
+            Output::Accum => 0,
+            Output::Rough => 1,
+            Output::Cells => 2,
+            Output::CellsPixelLights => 3,
+            Output::Any => 4,
+        }
+    }
+}
+
 impl Into {
     /// The pipeline's [`Output`] for this destination.
     pub fn output(self) -> Output {
         match self {
             Into::Accum => Output::Accum,
-            Into::Rough { .. } => Output::Rough,
+            Into::Rough => Output::Rough,
             Into::Cells { pixel_lights: false } => Output::Cells,
             Into::Cells { pixel_lights: true } => Output::CellsPixelLights,
-        }
-    }
-
-    /// How the pass writes, `lobe.comp`'s `fparams.y` (a push constant: a pipeline of one
-    /// [`Output`] reads only 1 against 2; [`Output::Any`] reads them all): 0 unfiltered, 1 filtered,
-    /// 2 filtered with a hash per pixel always, 3 sparse (over the blocks), 4 sparse with the light
-    /// term at each pixel.
-    pub fn mode(self) -> f32 {
-        match self {
-            Into::Accum => 0.0,
-            Into::Rough { strata: true } => 1.0,
-            Into::Rough { strata: false } => 2.0,
-            Into::Cells { pixel_lights: false } => 3.0,
-            Into::Cells { pixel_lights: true } => 4.0,
         }
     }
 }
@@ -314,13 +313,7 @@ impl Variant {
             lights: self.has_lights(),
             points: self.points(),
             reach_test: self.reach() != Reach::Untested,
-            output: match self.output {
-                Output::Accum => 0,
-                Output::Rough => 1,
-                Output::Cells => 2,
-                Output::CellsPixelLights => 3,
-                Output::Any => 4,
-            },
+            output: self.output.code(),
             light_slots: u32::from(light_slots),
             oriented_lights: u32::from(self.strips()),
         }

@@ -1,47 +1,45 @@
 //! Reflection on the shaders compiled into the crate and on small modules assembled here, and the
-//! layout check on every pass's declaration: no device needed.
+//! set layouts made of every pass's shaders: no device needed.
 
 use ash::vk;
 use spirv::{Decoration, Dim, Op, StorageClass};
 
-use super::{check_layout, reflect, ShaderBinding};
-use crate::render;
+use super::{layout, reflect, ShaderBinding};
 
-/// A pipeline's name, its shader modules and its declared layout.
-type Declared = (&'static str, Vec<&'static [u8]>, &'static [vk::DescriptorType]);
+/// A pipeline's name and its shader modules.
+type Shaders = (&'static str, Vec<&'static [u8]>);
 
 /// An instruction of a module assembled here: its opcode and its operands.
 type Instruction = (Op, Vec<u32>);
 
 /// Every pipeline the renderer makes.
-fn pipelines() -> Vec<Declared> {
+fn pipelines() -> Vec<Shaders> {
     vec![
-        ("accumulate", vec![crate::spirv!("accumulate.comp")], &render::accumulate::BINDINGS),
-        ("background", vec![crate::spirv!("background.comp")], &render::background::BINDINGS),
-        ("canvas", vec![crate::spirv!("canvas.comp")], &render::canvas::BINDINGS),
-        ("compact", vec![crate::spirv!("compact.comp")], &render::compact::BINDINGS),
-        ("compose", vec![crate::spirv!("compose.comp")], &render::compose::BINDINGS),
-        ("denoise", vec![crate::spirv!("denoise.comp")], &render::denoise::BINDINGS),
-        ("denoise-sparse", vec![crate::spirv!("denoise_sparse.comp")], &render::denoise::SPARSE_BINDINGS),
-        ("diffuse", vec![crate::spirv!("diffuse.comp")], &render::diffuse::BINDINGS),
-        ("eval", vec![crate::spirv!("eval.comp")], &render::eval::BINDINGS),
-        ("gbuffer", vec![crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")], &render::gbuffer::BINDINGS),
-        ("lobe", vec![crate::spirv!("lobe.comp")], &render::lobe::BINDINGS),
-        ("mis", vec![crate::spirv!("mis.comp")], &render::mis::BINDINGS),
-        ("peak", vec![crate::spirv!("peak.comp")], &render::peak::BINDINGS),
-        ("zero", vec![crate::spirv!("zero.comp")], &render::zero::BINDINGS),
+        ("accumulate", vec![crate::spirv!("accumulate.comp")]),
+        ("background", vec![crate::spirv!("background.comp")]),
+        ("canvas", vec![crate::spirv!("canvas.comp")]),
+        ("compact", vec![crate::spirv!("compact.comp")]),
+        ("compose", vec![crate::spirv!("compose.comp")]),
+        ("denoise", vec![crate::spirv!("denoise.comp")]),
+        ("denoise-sparse", vec![crate::spirv!("denoise_sparse.comp")]),
+        ("diffuse", vec![crate::spirv!("diffuse.comp")]),
+        ("eval", vec![crate::spirv!("eval.comp")]),
+        ("gbuffer", vec![crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")]),
+        ("lobe", vec![crate::spirv!("lobe.comp")]),
+        ("mis", vec![crate::spirv!("mis.comp")]),
+        ("peak", vec![crate::spirv!("peak.comp")]),
+        ("zero", vec![crate::spirv!("zero.comp")]),
     ]
 }
 
 #[test]
-fn every_pass_declares_its_shaders_bindings() {
-    for (name, modules, declared) in pipelines() {
-        if let Err(e) = check_layout(name, &modules, declared) {
-            panic!("{e}");
-        }
-        let found: usize = modules.iter().map(|m| reflect(m).unwrap().bindings.len()).sum();
-        // The G-buffer pass reads nothing through descriptors; every compute pass does.
-        assert_eq!(found == 0, declared.is_empty(), "{name}: {found} bindings in the shader");
+fn every_pass_makes_its_layout_from_its_shaders() {
+    for (name, modules) in pipelines() {
+        let made = layout(name, &modules).unwrap_or_else(|e| panic!("{e}"));
+        // The G-buffer pass reads nothing through descriptors; every compute pass does, with no
+        // binding number left out.
+        assert_eq!(made.is_empty(), name == "gbuffer", "{name}: {made:?}");
+        assert!(made.iter().all(Option::is_some), "{name}: {made:?}");
     }
 }
 
@@ -66,50 +64,36 @@ fn lobe_keeps_the_bindings_only_a_specialisation_reads() {
 }
 
 #[test]
-fn a_swapped_type_is_reported_with_shader_and_binding() {
-    let mut wrong = render::compact::BINDINGS;
-    wrong.swap(3, 4);
-    let e = check_layout("compact-test", &[crate::spirv!("compact.comp")], &wrong).unwrap_err().to_string();
-    assert!(e.contains("pipeline `compact-test`"), "{e}");
-    assert!(
-        e.contains(
-            "shader compact.comp, binding 3 (`accum`): declared COMBINED_IMAGE_SAMPLER, the shader has STORAGE_IMAGE"
-        ),
-        "{e}"
-    );
-    assert!(
-        e.contains(
-            "shader compact.comp, binding 4 (`env_tex`): declared STORAGE_IMAGE, the shader has COMBINED_IMAGE_SAMPLER"
-        ),
-        "{e}"
-    );
+fn stages_that_disagree_on_a_binding_are_reported_with_shader_and_binding() {
+    let storage_image = module(StorageClass::UniformConstant, 0, 2, 5, &[image(Dim::Dim2D, 2)]);
+    let sampled_image = module(StorageClass::UniformConstant, 0, 2, 5, &[image(Dim::Dim2D, 1)]);
+    let e = layout("two-stages", &[&storage_image, &sampled_image]).unwrap_err().to_string();
+    assert!(e.contains("pipeline `two-stages`"), "{e}");
+    assert!(e.contains("binding 2: SAMPLED_IMAGE here, STORAGE_IMAGE in another stage"), "{e}");
+    // The same binding in two stages is one, writable where either may write it.
+    let mut readonly = vec![image(Dim::Dim2D, 2)];
+    readonly.push((Op::Decorate, vec![10, Decoration::NonWritable as u32]));
+    let read = module(StorageClass::UniformConstant, 0, 2, 5, &readonly);
+    let made = layout("two-stages", &[&read, &storage_image]).unwrap();
+    assert_eq!(made.len(), 3);
+    assert_eq!(made[2].map(|d| (d.ty, d.writable)), Some((vk::DescriptorType::STORAGE_IMAGE, true)));
 }
 
 #[test]
-fn a_missing_binding_is_reported_with_shader_and_binding() {
-    let declared = &render::lobe::BINDINGS[..9];
-    let e = check_layout("lobe-test", &[crate::spirv!("lobe.comp")], declared).unwrap_err().to_string();
-    assert!(
-        e.contains("shader lobe.comp, binding 9 (`direct`): the shader has STORAGE_IMAGE, the layout declares none"),
-        "{e}"
-    );
-    assert!(!e.contains("binding 8"), "{e}");
+fn binding_numbers_no_shader_holds_are_left_out_of_the_layout() {
+    let only_two = module(StorageClass::UniformConstant, 0, 2, 5, &[image(Dim::Dim2D, 2)]);
+    let made = layout("gap", &[&only_two]).unwrap();
+    assert_eq!(made[..2], [None, None]);
+    assert!(made[2].is_some());
 }
 
 #[test]
-fn a_graphics_pipeline_checks_each_stage() {
+fn a_graphics_pipeline_reads_each_stage() {
     let modules: [&[u8]; 2] = [crate::spirv!("gbuffer.vert"), crate::spirv!("gbuffer.frag")];
     let sampler = module(StorageClass::UniformConstant, 1, 0, 5, &[(Op::TypeSampler, vec![5])]);
-    check_layout("gbuffer-test", &modules, &[]).unwrap();
-    let e = check_layout("gbuffer-test", &[modules[0], &sampler], &[]).unwrap_err().to_string();
-    assert!(e.contains("shader gbuffer-test, binding 0: in set 1, the layout has set 0 alone"), "{e}");
-}
-
-#[test]
-fn declared_bindings_the_shader_lacks_are_allowed() {
-    let mut more = render::eval::BINDINGS.to_vec();
-    more.push(vk::DescriptorType::UNIFORM_BUFFER);
-    check_layout("eval-test", &[crate::spirv!("eval.comp")], &more).unwrap();
+    assert!(layout("gbuffer-test", &modules).unwrap().is_empty());
+    let e = layout("gbuffer-test", &[modules[0], &sampler]).unwrap_err().to_string();
+    assert!(e.contains("shader gbuffer-test, binding 0: in set 1, a pipeline has set 0 alone"), "{e}");
 }
 
 #[test]
@@ -123,7 +107,7 @@ fn malformed_modules_are_errors() {
     let mut zero_count = good[..20].to_vec();
     zero_count.extend_from_slice(&[0, 0, 0, 0]);
     assert!(reflect(&zero_count).is_err(), "an instruction of no words");
-    let e = check_layout("zero-test", &[&good[..24]], &[]).unwrap_err();
+    let e = layout("zero-test", &[&good[..24]]).unwrap_err();
     assert!(matches!(e, crate::Error::Bug(_)) && e.to_string().contains("pipeline `zero-test`"), "{e}");
 }
 
@@ -193,13 +177,9 @@ fn arrays_of_descriptors_are_counted_and_refused() {
     assert_eq!((b.ty, b.count), (vk::DescriptorType::STORAGE_IMAGE, 4));
     let runtime = [image(Dim::Dim2D, 1), (Op::TypeRuntimeArray, vec![6, 5])];
     assert_eq!(one(StorageClass::UniformConstant, 6, &runtime).count, 0);
-    let declared = [vk::DescriptorType::STORAGE_IMAGE; 3];
     let m = module(StorageClass::UniformConstant, 0, 2, 6, &sized);
-    let e = check_layout("array-test", &[&m], &declared).unwrap_err().to_string();
-    assert!(
-        e.contains("shader array-test, binding 2: the shader has an array of 4 descriptors, the layout one"),
-        "{e}"
-    );
+    let e = layout("array-test", &[&m]).unwrap_err().to_string();
+    assert!(e.contains("shader array-test, binding 2: an array of 4 descriptors, a binding holds one"), "{e}");
 }
 
 #[test]
@@ -243,8 +223,8 @@ fn readonly_storage_is_not_writable_and_plain_storage_is() {
 
 #[test]
 fn each_pass_may_write_the_bindings_its_glsl_leaves_writable() {
-    // Per declared binding: `w` where the shader may write it (not `readonly`), `-` where it
-    // may not (`readonly`, a uniform buffer, a sampler) or lacks it.
+    // Per binding: `w` where the shader may write it (not `readonly`), `-` where it may not
+    // (`readonly`, a uniform buffer, a sampler).
     let expected = [
         ("accumulate", "-w"),
         ("background", "-w--"),
@@ -263,10 +243,10 @@ fn each_pass_may_write_the_bindings_its_glsl_leaves_writable() {
     ];
     let pipelines = pipelines();
     assert_eq!(pipelines.len(), expected.len());
-    for ((name, modules, declared), (want_name, want)) in pipelines.into_iter().zip(expected) {
+    for ((name, modules), (want_name, want)) in pipelines.into_iter().zip(expected) {
         assert_eq!(name, want_name);
-        let writable = check_layout(name, &modules, declared).unwrap();
-        let got: String = writable.iter().map(|&w| if w { 'w' } else { '-' }).collect();
+        let made = layout(name, &modules).unwrap();
+        let got: String = made.iter().map(|d| if d.is_some_and(|d| d.writable) { 'w' } else { '-' }).collect();
         assert_eq!(got, want, "{name}");
     }
 }
