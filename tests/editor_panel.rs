@@ -155,6 +155,7 @@ fn the_panel_verdict_names_what_breaks_physical_correctness() {
     reciprocal.lobes.push(Lobe::isotropic([0.4; 3], 0.1));
     assert_eq!(broken(&Report::measure(&reciprocal, 2_000, 1_000)), None);
     let ward = Material {
+        preserve_energy: false,
         diffuse: [0.0; 3],
         normalization: Normalization::Ward,
         symmetrize: false,

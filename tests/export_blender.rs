@@ -85,7 +85,13 @@ fn lobe(albedo: f64, ax: f64, ay: f64) -> Lobe {
 }
 
 fn reciprocal(diffuse: f64, lobes: Vec<Lobe>) -> Material {
-    Material { diffuse: [diffuse; 3], normalization: Normalization::Reciprocal, symmetrize: false, lobes }
+    Material {
+        preserve_energy: false,
+        diffuse: [diffuse; 3],
+        normalization: Normalization::Reciprocal,
+        symmetrize: false,
+        lobes,
+    }
 }
 
 /// The furnace materials: one lobe each, isotropic, tilted, split (tilted both ways) and anisotropic.

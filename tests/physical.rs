@@ -33,7 +33,13 @@ fn tilted(alpha_x: f64, alpha_y: f64, phi: f64, tilt_deg: f64, azimuth_deg: f64,
 }
 
 fn one(lobe: Lobe) -> Material {
-    Material { diffuse: [0.0; 3], normalization: Normalization::Reciprocal, symmetrize: false, lobes: vec![lobe] }
+    Material {
+        preserve_energy: false,
+        diffuse: [0.0; 3],
+        normalization: Normalization::Reciprocal,
+        symmetrize: false,
+        lobes: vec![lobe],
+    }
 }
 
 /// Stiff lobes: α from 1e-4 to 1, 1000:1 anisotropy, tilts to 89°, split, degenerate frames.

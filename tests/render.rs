@@ -171,7 +171,13 @@ fn sh_diffuse_pass_equals_cpu_sh9_irradiance() {
     use brdf_shop::scene::env::sh_irradiance;
     let mut r = renderer();
     let mesh = Mesh::sphere();
-    let m = Material { diffuse: [0.8, 0.5, 0.3], normalization: Normalization::Ward, symmetrize: false, lobes: vec![] };
+    let m = Material {
+        preserve_energy: false,
+        diffuse: [0.8, 0.5, 0.3],
+        normalization: Normalization::Ward,
+        symmetrize: false,
+        lobes: vec![],
+    };
     for map in ["sky.exr", "studio.exr", "city.exr"] {
         let e = env(map);
         r.set_environment(&e).unwrap();
@@ -241,7 +247,13 @@ fn stress_cases_stay_finite() {
     let e = env("sky.exr");
     r.set_environment(&e).unwrap();
     r.set_mesh(&Mesh::sphere()).unwrap();
-    let mut many = Material { diffuse: [0.02; 3], normalization: Normalization::Ward, symmetrize: true, lobes: vec![] };
+    let mut many = Material {
+        preserve_energy: false,
+        diffuse: [0.02; 3],
+        normalization: Normalization::Ward,
+        symmetrize: true,
+        lobes: vec![],
+    };
     for k in 0..32 {
         let a = 1e-4f64 * 10f64.powf(k as f64 / 31.0 * 4.0);
         many.lobes.push(Lobe {
@@ -291,6 +303,7 @@ fn passes_follow_the_scene() {
         r.render(m, &settings(16, 8, est)).unwrap().timings.into_iter().map(|t| t.name).collect()
     };
     let mut m = Material {
+        preserve_energy: false,
         diffuse: [0.0; 3],
         normalization: Normalization::Ward,
         symmetrize: false,
@@ -325,6 +338,7 @@ fn frame(r: &mut Renderer, m: &Material, s: &Settings) -> (Vec<String>, Image) {
 /// A rough Ward lobe alone (α 0.5, albedo 0.8): the filter's case.
 fn rough_ward() -> Material {
     Material {
+        preserve_energy: false,
         diffuse: [0.0; 3],
         normalization: Normalization::Ward,
         symmetrize: false,

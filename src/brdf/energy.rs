@@ -253,14 +253,17 @@ pub fn facet_albedo(m: &Material, wo: DVec3, n: usize) -> [f64; 3] {
 }
 
 /// Each lobe's albedo per unit albedo at `ω_o`: the mean of [`facet_term_albedo`] over its facet
-/// terms (`n × n` cells each).
+/// terms (`n × n` cells each), with its compensation term's albedo in an energy-preserving material.
 pub fn facet_lobe_terms(m: &Material, wo: DVec3, n: usize) -> Vec<f64> {
+    let tables = m.tables();
     m.lobes
         .iter()
-        .map(|l| {
+        .enumerate()
+        .map(|(k, l)| {
             let (frames, count) = l.facet_frames();
             let shape = l.shape();
-            frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64
+            let e = frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64;
+            e + tables.as_ref().map_or(0.0, |t| t[k].term_albedo(wo))
         })
         .collect()
 }

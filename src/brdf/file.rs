@@ -7,6 +7,8 @@
 //! `normalization` and `symmetrize` as in version 1). Version-1 files have no `model` and mean the
 //! paper's construction. A missing `normalization` means `"ward"` (the paper's eq. 1); missing
 //! `symmetrize`, `tangent_angle`, `rotation` and `split` mean `false`, 0, identity and `false`.
+//! A reciprocal material's `"preserve_energy"` (docs/model.md, Energy preservation) says whether its
+//! lobes add their energy compensation; missing, it means `false` (how such a file always rendered).
 
 use std::path::Path;
 
@@ -63,6 +65,8 @@ struct MaterialFile {
     normalization: Option<Normalization>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     symmetrize: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    preserve_energy: Option<bool>,
     lobes: Vec<LobeFile>,
 }
 
@@ -79,7 +83,15 @@ fn model_of(origin: &str, f: &MaterialFile) -> Result<(Normalization, bool)> {
         (1, Some(_)) => {
             Err(Error::input(origin, "model: needs \"version\": 2 (version 1 means the paper's construction)"))
         }
-        (1, None) | (_, Some(Model::Paper)) => Ok((f.normalization.unwrap_or_default(), symmetrize)),
+        (1, None) | (_, Some(Model::Paper)) => {
+            if f.preserve_energy.is_some() {
+                return Err(Error::input(
+                    origin,
+                    "preserve_energy: only for \"model\": \"reciprocal\" (the paper's model is as the paper has it)",
+                ));
+            }
+            Ok((f.normalization.unwrap_or_default(), symmetrize))
+        }
         (_, None | Some(Model::Reciprocal)) => {
             if f.normalization.is_some() {
                 return Err(Error::input(
@@ -159,6 +171,9 @@ impl Material {
             ));
         }
         check_albedo(origin, "diffuse", self.diffuse)?;
+        if self.preserve_energy && self.normalization != Normalization::Reciprocal {
+            return Err(Error::input(origin, "preserve_energy: only for the reciprocal model"));
+        }
         for (k, l) in self.lobes.iter().enumerate() {
             check_albedo(origin, &format!("lobes[{k}].albedo"), l.albedo)?;
             for (name, a) in [("alpha_x", l.alpha_x), ("alpha_y", l.alpha_y)] {
@@ -224,7 +239,8 @@ impl Material {
                 split: l.split,
             });
         }
-        let m = Material { diffuse: f.diffuse, normalization, symmetrize, lobes };
+        let preserve_energy = f.preserve_energy.unwrap_or(false);
+        let m = Material { diffuse: f.diffuse, normalization, symmetrize, lobes, preserve_energy };
         m.validate(origin)?;
         Ok(m)
     }
@@ -245,6 +261,7 @@ impl Material {
             model: Some(if reciprocal { Model::Reciprocal } else { Model::Paper }),
             normalization: (!reciprocal).then_some(self.normalization),
             symmetrize: (!reciprocal).then_some(self.symmetrize),
+            preserve_energy: reciprocal.then_some(self.preserve_energy),
             lobes: self
                 .lobes
                 .iter()

@@ -4,8 +4,11 @@
 //! Owns the material's parameters and their evaluation; file I/O lives in `file.rs`, sampling in
 //! `sampling.rs`.
 
+use std::sync::Arc;
+
 use glam::{DQuat, DVec3, Quat, Vec3};
 
+use super::compensation::{self, Table};
 use super::ward::{self, Normalization, Shape};
 
 /// Smallest and largest roughness the model accepts (docs/model.md, The paper model: α down to 1e-4 and up to 1).
@@ -153,6 +156,9 @@ pub struct Material {
     pub normalization: Normalization,
     pub symmetrize: bool,
     pub lobes: Vec<Lobe>,
+    /// Each lobe adds its energy compensation term, so that it reflects the albedo it is given
+    /// (docs/model.md, Energy preservation; `brdf::compensation`). The reciprocal model only.
+    pub preserve_energy: bool,
 }
 
 /// `ln(mean(exp(x)))` without overflow; `−∞` when every term is `−∞`.
@@ -182,6 +188,7 @@ impl Material {
     /// What the editor and `paint` start from: a grey diffuse base in the bounded normalisation.
     pub fn scratch() -> Self {
         Material {
+            preserve_energy: false,
             diffuse: [0.5, 0.5, 0.5],
             normalization: Normalization::Reciprocal,
             symmetrize: false,
@@ -206,6 +213,8 @@ impl Material {
         out.normalization = norm;
         if to_facet {
             out.symmetrize = false;
+        } else {
+            out.preserve_energy = false;
         }
         if from_facet != to_facet {
             for l in &mut out.lobes {
@@ -269,15 +278,16 @@ impl Material {
         log_mean_exp(&terms[..count])
     }
 
-    /// `f(ω_i, ω_o)` without symmetrisation, for unit vectors in the local frame; 0 where either is
-    /// under the grazing cut-off.
-    fn eval_one_way(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
+    /// `f(ω_i, ω_o)` without symmetrisation, for unit vectors in the local frame, each lobe with its
+    /// compensation term where `tables` holds the lobes' tables ([`Material::tables`]); 0 where
+    /// either direction is under the grazing cut-off.
+    fn eval_one_way(&self, tables: Option<&[Arc<Table>]>, wi: DVec3, wo: DVec3) -> [f64; 3] {
         if !(above_horizon(wi.z) && above_horizon(wo.z)) {
             return [0.0; 3];
         }
         let mut f = self.diffuse.map(|d| d / std::f64::consts::PI);
-        for lobe in &self.lobes {
-            let v = lobe.eval(self.normalization, wi, wo);
+        for (k, lobe) in self.lobes.iter().enumerate() {
+            let v = lobe.eval(self.normalization, wi, wo) + tables.map_or(0.0, |t| t[k].term(wi, wo));
             for (c, a) in f.iter_mut().zip(lobe.albedo) {
                 *c += a * v;
             }
@@ -285,17 +295,29 @@ impl Material {
         f
     }
 
+    /// The compensation tables of the lobes, in order, for an energy-preserving material
+    /// (`brdf::compensation`); `None` for any other.
+    pub fn tables(&self) -> Option<Vec<Arc<Table>>> {
+        self.preserve_energy.then(|| self.lobes.iter().map(compensation::table).collect())
+    }
+
     /// `f(ω_i, ω_o)` per RGB channel, in the local frame. Inputs are normalised first; a zero-length
     /// or non-finite direction gives 0, as does a direction at or below the horizon: one whose
     /// normalised cosine is under the grazing cut-off [`GRAZING_COS`] (docs/model.md, Frames and
     /// conventions, The horizon).
     pub fn eval(&self, wi: DVec3, wo: DVec3) -> [f64; 3] {
+        self.eval_with(self.tables().as_deref(), wi, wo)
+    }
+
+    /// [`Material::eval`] with the lobes' compensation tables fetched once ([`Material::tables`]),
+    /// for loops that evaluate one material many times.
+    pub fn eval_with(&self, tables: Option<&[Arc<Table>]>, wi: DVec3, wo: DVec3) -> [f64; 3] {
         let (Some(wi), Some(wo)) = (unit(wi), unit(wo)) else {
             return [0.0; 3];
         };
-        let f = self.eval_one_way(wi, wo);
+        let f = self.eval_one_way(tables, wi, wo);
         let f = if self.is_symmetrized() {
-            let g = self.eval_one_way(wo, wi);
+            let g = self.eval_one_way(tables, wo, wi);
             [0, 1, 2].map(|c| 0.5 * f[c] + 0.5 * g[c])
         } else {
             f

@@ -5,6 +5,7 @@
 //! Plain Rust: nothing here may import `ash` or anything of the renderer; the renderer and the editor
 //! depend on this module, never the reverse.
 
+pub mod compensation;
 pub mod energy;
 pub mod file;
 pub mod material;

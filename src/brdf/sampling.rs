@@ -1,14 +1,16 @@
 //! Importance sampling of the material: Ward's half-vector sampling of each lobe (the paper's choice),
 //! Walter's exact pdf for it (Walter 2005), the closed-form sample weights of docs/model.md, The paper model, and a
 //! mixture sampler over the whole material (diffuse, every lobe, both halves of split lobes and both
-//! directions of a symmetrised material) used by the energy checks and the CPU reference renderer.
+//! directions of a symmetrised material, the lobes' energy compensation) used by the energy checks and the CPU reference renderer.
 //!
 //! Owns no state beyond a prepared sampler; evaluation lives in `material.rs`.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use glam::{DQuat, DVec3};
 
+use super::compensation::Table;
 use super::material::{Lobe, Material};
 use super::ward::{self, Normalization, Shape};
 
@@ -128,6 +130,9 @@ enum Component {
         lobe: usize,
         inverse: bool,
     },
+    /// A lobe's energy compensation term (`brdf::compensation`), cosine-sampled: the term is
+    /// smooth over the hemisphere.
+    Compensation,
 }
 
 /// A one-sample mixture over the material's terms, weighted by albedo (balance heuristic through the
@@ -136,6 +141,8 @@ pub struct MaterialSampler<'a> {
     material: &'a Material,
     wo: DVec3,
     components: Vec<(Component, f64)>,
+    /// The lobes' compensation tables of an energy-preserving material.
+    tables: Option<Vec<Arc<Table>>>,
 }
 
 fn mean(c: [f64; 3]) -> f64 {
@@ -145,6 +152,20 @@ fn mean(c: [f64; 3]) -> f64 {
 impl<'a> MaterialSampler<'a> {
     pub fn new(material: &'a Material, wo: DVec3) -> Self {
         let mut components = Vec::new();
+        let tables = material.tables();
+        // Each lobe's compensation term, weighted by its albedo at this view: ρ (1 − Ê(ω_o)) at
+        // most; the term's samples share the cosine distribution.
+        if let Some(t) = &tables {
+            let w: f64 = material
+                .lobes
+                .iter()
+                .zip(t)
+                .map(|(l, t)| mean(l.albedo) * (1.0 - f64::from(t.albedo(wo.as_vec3().to_array()))))
+                .sum();
+            if w > 0.0 {
+                components.push((Component::Compensation, w));
+            }
+        }
         let symmetrize = material.is_symmetrized();
         let sym = if symmetrize { 0.5 } else { 1.0 };
         for (k, lobe) in material.lobes.iter().enumerate() {
@@ -178,7 +199,7 @@ impl<'a> MaterialSampler<'a> {
             c.1 /= total;
         }
         components.retain(|c| c.1 > 0.0);
-        MaterialSampler { material, wo, components }
+        MaterialSampler { material, wo, components, tables }
     }
 
     fn lobe(&self, k: usize) -> &Lobe {
@@ -198,7 +219,7 @@ impl<'a> MaterialSampler<'a> {
             }
         }
         let wi = match pick {
-            Component::Diffuse => sample_cosine(u1, u2),
+            Component::Diffuse | Component::Compensation => sample_cosine(u1, u2),
             Component::Forward { lobe, b } => sample_lobe(&self.lobe(lobe).shape(), b, u1, u2)?,
             Component::Facet { lobe, frame } => sample_facet(&self.lobe(lobe).shape(), frame, self.wo, u1, u2)?,
             Component::Reverse { lobe, inverse } => {
@@ -220,7 +241,7 @@ impl<'a> MaterialSampler<'a> {
             .iter()
             .map(|&(c, w)| {
                 w * match c {
-                    Component::Diffuse => wi.z.max(0.0) / PI,
+                    Component::Diffuse | Component::Compensation => wi.z.max(0.0) / PI,
                     Component::Forward { lobe, b } => pdf_lobe(&self.lobe(lobe).shape(), b, wi),
                     Component::Facet { lobe, frame } => pdf_facet(&self.lobe(lobe).shape(), frame, self.wo, wi),
                     Component::Reverse { lobe, inverse } => {
@@ -239,7 +260,12 @@ impl<'a> MaterialSampler<'a> {
         if !(p > 0.0) {
             return [0.0; 3];
         }
-        let f = self.material.eval(wi, self.wo);
+        let f = self.eval(wi);
         f.map(|v| v * wi.z / p)
+    }
+
+    /// `f(ω_i, ω_o)` per channel at this sampler's view.
+    pub fn eval(&self, wi: DVec3) -> [f64; 3] {
+        self.material.eval_with(self.tables.as_deref(), wi, self.wo)
     }
 }

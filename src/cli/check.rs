@@ -10,11 +10,14 @@ use super::{NotPhysicallyCorrect, UsageError};
 
 const CHANNELS: [&str; 3] = ["red", "green", "blue"];
 
+/// Each lobe's white-furnace range and the material's (`compensation::furnace`).
+type Furnace = (Vec<[f64; 2]>, [f64; 2]);
+
 /// The report as text lines.
-pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> String {
+pub fn report_text(m: &Material, r: &Report, furnace: Option<&Furnace>, samples: usize, pairs: usize) -> String {
     let a = &r.max_albedo;
     let model = if m.normalization == Normalization::Reciprocal {
-        "model: reciprocal".to_owned()
+        format!("model: reciprocal{}", if m.preserve_energy { ", energy-preserving" } else { "" })
     } else {
         format!("model: paper, normalization: {}, symmetrize: {}", m.normalization.name(), m.symmetrize)
     };
@@ -66,6 +69,15 @@ pub fn report_text(m: &Material, r: &Report, samples: usize, pairs: usize) -> St
             "warning: the directional albedo exceeds 1: this material reflects more than it receives at that angle ({why})\n"
         ));
     }
+    if let Some((lobes, material)) = furnace {
+        for (k, [lo, hi]) in lobes.iter().enumerate() {
+            s.push_str(&format!("white furnace, lobe {k} (albedo 1, views ≤ 80°): {lo:.4} to {hi:.4}\n"));
+        }
+        let [lo, hi] = material;
+        s.push_str(&format!(
+            "white furnace, material (directional albedo over diffuse + Σ lobe albedos, views ≤ 80°): {lo:.4} to {hi:.4}\n"
+        ));
+    }
     s.push_str(&format!("verdict: {}\n", r.verdict()));
     s
 }
@@ -91,6 +103,7 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
     let r = Report::measure_watched(&m, samples, pairs, watch);
     bar.finish_and_clear();
     let r = r.ok_or(brdf_shop::interrupt::Interrupted)?;
+    let furnace = brdf_shop::brdf::compensation::furnace(&m);
     if json {
         let a = &r.max_albedo;
         let v = serde_json::json!({
@@ -107,10 +120,12 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
             "reciprocity_error": r.reciprocity.max_rel,
             "reciprocity_mean_error": r.reciprocity.mean_rel,
             "pairs": pairs,
+            "preserve_energy": m.preserve_energy,
+            "white_furnace": furnace.as_ref().map(|(lobes, material)| serde_json::json!({ "lobes": lobes, "material": material })),
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print!("{}: {}", brdf_shop::fsio::show(material), report_text(&m, &r, samples, pairs));
+        print!("{}: {}", brdf_shop::fsio::show(material), report_text(&m, &r, furnace.as_ref(), samples, pairs));
     }
     if r.is_physically_correct() {
         Ok(())

@@ -35,7 +35,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
 
     let (samples, pairs) = (20_000, 200_000);
     let report = Report::measure(&m, samples, pairs);
-    let text = super::check::report_text(&m, &report, samples, pairs);
+    let text = super::check::report_text(&m, &report, None, samples, pairs);
     brdf_shop::fsio::write_atomic(&out.join("check.txt"), text.as_bytes())?;
     print!("{text}");
     println!("wrote {0}/mesh.png, {0}/canvas.png, {0}/material.brdf.json, {0}/check.txt", brdf_shop::fsio::show(out));

@@ -115,7 +115,13 @@ pub fn painted(name: &str, strokes: &str) -> Result<Material> {
 /// both paper normalisations, and the painted reciprocal-model ones ([`PAINTED`]), specular only
 /// (so every estimator integrates the same terms).
 pub fn report_materials() -> Vec<(&'static str, Material)> {
-    let m = |norm, lobes: Vec<Lobe>| Material { diffuse: [0.0; 3], normalization: norm, symmetrize: false, lobes };
+    let m = |norm, lobes: Vec<Lobe>| Material {
+        preserve_energy: false,
+        diffuse: [0.0; 3],
+        normalization: norm,
+        symmetrize: false,
+        lobes,
+    };
     use glam::DQuat;
     let painted =
         PAINTED.iter().map(|(name, strokes)| (*name, painted(name, strokes).expect("the embedded strokes paint")));

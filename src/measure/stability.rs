@@ -33,7 +33,7 @@ pub struct Case {
 pub const AGREEMENT_BOUND: f64 = 2e-2;
 
 fn mat(norm: Normalization, lobes: Vec<Lobe>) -> Material {
-    Material { diffuse: [0.05; 3], normalization: norm, symmetrize: false, lobes }
+    Material { preserve_energy: false, diffuse: [0.05; 3], normalization: norm, symmetrize: false, lobes }
 }
 
 fn lobe(a: f64, ax: f64, ay: f64) -> Lobe {

@@ -206,7 +206,7 @@ mod tests {
                 ..Lobe::isotropic([0.4, 0.3, 0.2], a)
             })
             .collect();
-        Material { diffuse: [0.1, 0.1, 0.1], normalization: norm, symmetrize: false, lobes }
+        Material { preserve_energy: false, diffuse: [0.1, 0.1, 0.1], normalization: norm, symmetrize: false, lobes }
     }
 
     /// Lights from overhead to under the horizon, the canvas's default among them.

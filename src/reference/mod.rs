@@ -282,7 +282,7 @@ fn shade(
     let sampler = MaterialSampler::new(material, wo);
     let mut rng = Pcg32::new(pixel, 0x5eed);
     let rot: [f64; 5] = std::array::from_fn(|_| rng.next_f64());
-    let f = |wi: DVec3| DVec3::from_array(material.eval(wi, wo));
+    let f = |wi: DVec3| DVec3::from_array(sampler.eval(wi));
     let mut sum = DVec3::ZERO;
     for q in seq {
         let u: [f64; 5] = std::array::from_fn(|k| (q[k] + rot[k]).fract());

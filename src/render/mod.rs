@@ -266,6 +266,7 @@ impl Renderer {
 
     /// `f(ω_i, ω_o)` in `f32` on the GPU for each pair (local frame), checked for validation errors.
     pub fn eval(&self, material: &Material, pairs: &[(DVec3, DVec3)]) -> Result<Vec<[f32; 3]>> {
+        refuse_preserved_energy(material)?;
         let out = self.passes.as_ref().expect("passes live until drop").eval.run(&self.ctx, material, pairs)?;
         self.ctx.check_validation()?;
         Ok(out)
@@ -362,6 +363,7 @@ impl Renderer {
     /// `material` into the frame's buffer. That earlier frame's GPU times join the finished ones
     /// ([`Renderer::take_finished`]).
     pub fn begin_frame(&mut self, material: &Material) -> Result<()> {
+        refuse_preserved_energy(material)?;
         let n = material.lobes.len() as u32;
         let ring = self.ring.as_mut().expect("ring lives until drop");
         // Passes: G-buffer, background, diffuse, a pass per lobe, denoise, canvas, compose, and the
@@ -472,4 +474,17 @@ impl Drop for Renderer {
             b.1.destroy(&self.ctx);
         }
     }
+}
+
+/// The GPU passes draw the lobes without their energy compensation (`brdf::compensation`): an
+/// energy-preserving material is refused rather than drawn darker than it is. `reference`, `eval`
+/// and `check` evaluate it.
+fn refuse_preserved_energy(material: &Material) -> Result<()> {
+    if material.preserve_energy {
+        return Err(crate::Error::input(
+            "material",
+            "preserve_energy: the GPU renderer draws no energy compensation; `reference`, `eval` and `check` evaluate it",
+        ));
+    }
+    Ok(())
 }

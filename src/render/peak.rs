@@ -149,7 +149,13 @@ pub fn fixed_costs(r: &mut Renderer, frames: usize) -> Result<FixedCosts> {
     r.finish_frames()?;
     r.take_finished();
     let pass = PeakPass::new(&r.ctx)?;
-    let nothing = Material { diffuse: [0.0; 3], normalization: Normalization::Ward, symmetrize: false, lobes: vec![] };
+    let nothing = Material {
+        preserve_energy: false,
+        diffuse: [0.0; 3],
+        normalization: Normalization::Ward,
+        symmetrize: false,
+        lobes: vec![],
+    };
     let scratch = match Scratch::new(&r.ctx, &pass) {
         Ok(s) => s,
         Err(e) => {

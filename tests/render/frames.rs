@@ -13,6 +13,7 @@ fn a_frame_that_does_not_time_its_passes_times_the_whole_frame_and_draws_the_sam
     r.set_environment(&env("studio.exr")).unwrap();
     r.set_mesh(&Mesh::sphere()).unwrap();
     let m = Material {
+        preserve_energy: false,
         diffuse: [0.2; 3],
         normalization: Normalization::Reciprocal,
         symmetrize: false,
@@ -278,6 +279,7 @@ fn the_sparse_filter_adds_the_diffuse_term_of_a_frame_that_rasterises() {
     let moved = Settings { camera: Camera { eye: DVec3::new(1.0, 2.0, 4.0), ..Camera::default() }, ..s.clone() };
     let has = |names: &[String], n: &str| names.iter().any(|x| x == n);
     let material = |alphas: &[f64]| Material {
+        preserve_energy: false,
         diffuse: [0.2, 0.3, 0.4],
         normalization: Normalization::Ward,
         symmetrize: false,

@@ -8,7 +8,13 @@ use crate::brdf::{Lobe, Material, Normalization};
 use crate::scene::{keylight, Environment};
 
 fn material(diffuse: f64, lobes: Vec<Lobe>) -> Material {
-    Material { diffuse: [diffuse; 3], normalization: Normalization::Reciprocal, symmetrize: false, lobes }
+    Material {
+        preserve_energy: false,
+        diffuse: [diffuse; 3],
+        normalization: Normalization::Reciprocal,
+        symmetrize: false,
+        lobes,
+    }
 }
 
 fn lobe(albedo: f64, alpha: f64) -> Lobe {
