@@ -8,15 +8,23 @@ use glam::DVec3;
 use crate::brdf::{Material, Normalization};
 use crate::rng::radical_inverse;
 
-/// `Push` of `pass.glsl`: 128 bytes, the push-constant size every device guarantees.
+/// The camera and sizes every pass's push constants begin with (`pass.glsl`): 80 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Push {
+pub struct FramePush {
     pub eye: [f32; 4],
     pub right: [f32; 4],
     pub up: [f32; 4],
     pub forward: [f32; 4],
     pub size: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<FramePush>() == 80);
+
+/// `Push` of `pass.glsl`: 128 bytes, the push-constant size every device guarantees.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Push {
+    pub frame: FramePush,
     pub params: [u32; 4],
     pub fparams: [f32; 4],
     pub light: [f32; 4],
@@ -28,11 +36,7 @@ const _: () = assert!(std::mem::size_of::<Push>() == 128);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct LobePush {
-    pub eye: [f32; 4],
-    pub right: [f32; 4],
-    pub up: [f32; 4],
-    pub forward: [f32; 4],
-    pub size: [u32; 4],
+    pub frame: FramePush,
     /// The lobe's index, its samples, the frame's seed, the points in its light set.
     pub params: [u32; 4],
     /// Where the pass writes: [`crate::render::plan::Output::code`].
@@ -45,20 +49,6 @@ pub struct LobePush {
     pub ends: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<LobePush>() == 128);
-
-impl LobePush {
-    /// The frame's part of `push`, the lobe's zero.
-    pub fn of_frame(push: &Push) -> LobePush {
-        LobePush {
-            eye: push.eye,
-            right: push.right,
-            up: push.up,
-            forward: push.forward,
-            size: push.size,
-            ..LobePush::default()
-        }
-    }
-}
 
 /// `GpuLobe` of `material.glsl`.
 #[repr(C)]

@@ -200,7 +200,7 @@ fn push(frame: &super::gpu::Push, job: &Job<'_>, lights: &LightSet<'_>) -> super
         lod_bias: if job.into == Into::Accum { KEY_LOD_BIAS } else { super::denoise::LOD_BIAS },
         light_counts: lights.counts,
         ends: lights.ends.unwrap_or([lights.count; MAX_LIGHTS]),
-        ..super::gpu::LobePush::of_frame(frame)
+        frame: frame.frame,
     }
 }
 

@@ -125,10 +125,10 @@ fn camera_push(camera: &Camera, width: u32, height: u32, push: &mut Push) {
     let up = right.cross(forward);
     let t = (camera.fov_deg.to_radians() / 2.0).tan();
     let aspect = width as f64 / height as f64;
-    push.eye = gpu::vec4(camera.eye, 1.0);
-    push.right = gpu::vec4(right * t * aspect, 0.0);
-    push.up = gpu::vec4(up * t, 0.0);
-    push.forward = gpu::vec4(forward, 0.0);
+    push.frame.eye = gpu::vec4(camera.eye, 1.0);
+    push.frame.right = gpu::vec4(right * t * aspect, 0.0);
+    push.frame.up = gpu::vec4(up * t, 0.0);
+    push.frame.forward = gpu::vec4(forward, 0.0);
 }
 
 impl Renderer {
@@ -378,11 +378,11 @@ impl Renderer {
         let mut push = Push::default();
         camera_push(&settings.camera, w, h, &mut push);
         let (ew, eh) = self.env.as_ref().map_or((1, 1), |e| (e.width, e.height));
-        push.size = [w, h, ew, eh];
+        push.frame.size = [w, h, ew, eh];
         push.light = gpu::vec4(settings.light, settings.intensity as f32);
         // The backdrop's mip level (`backdrop_lod` in pass.glsl) travels in the forward vector's
         // unused fourth component.
-        push.forward[3] = backdrop_lod(settings.backdrop_blur);
+        push.frame.forward[3] = backdrop_lod(settings.backdrop_blur);
         let targets = self.views[settings.view as usize].as_ref().expect("made by targets_for");
         let rec = Recording::new(ctx, cmd, pool, push, targets, self.env.as_ref());
         let steps = steps::StepRecorder {

@@ -157,3 +157,32 @@ fn the_sampler_estimates_the_compensated_albedo() {
         );
     }
 }
+
+/// Stiff lobes (α 10⁻⁴ and 1, anisotropy 1:10⁴, tilts to 89°, split): every table value is finite
+/// and within [0, 1], `Ē` within [0, 1], the scale finite, and the term finite, non-negative and
+/// reciprocal at grazing views as well as at normal ones.
+#[test]
+fn stiff_lobes_keep_the_term_finite_and_bounded() {
+    let cases = [
+        lobe(1e-4, 1e-4, 0.0, false),
+        lobe(1.0, 1.0, 0.0, false),
+        lobe(1e-4, 1.0, 30.0, false),
+        lobe(1.0, 1e-4, 89.0, true),
+        lobe(1e-4, 1e-4, 89.0, false),
+        lobe(1.0, 1.0, 89.0, true),
+    ];
+    let views = [view(0.0, 0.0), view(45.0, 10.0), view(84.9, 200.0), view(89.99, 77.0), view(90.0, 0.0)];
+    for l in &cases {
+        let t = bake(l);
+        assert!(t.values.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "{l:?}: {:?}", t.values);
+        assert!((0.0..=1.0).contains(&t.mean) && t.scale.is_finite() && t.scale >= 0.0, "{l:?}");
+        for &a in &views {
+            for &b in &views {
+                let (ab, ba) = (t.term(a, b), t.term(b, a));
+                assert!(ab.is_finite() && ab >= 0.0 && ab.to_bits() == ba.to_bits(), "{l:?}: {ab} {ba}");
+            }
+            let e = t.albedo(a.as_vec3().to_array());
+            assert!(e.is_finite() && (0.0..=1.0).contains(&e), "{l:?}: Ê {e}");
+        }
+    }
+}
