@@ -186,3 +186,10 @@ fn stiff_lobes_keep_the_term_finite_and_bounded() {
         }
     }
 }
+
+/// A table is a function of the lobe alone: baked twice (cells in parallel), the same bits.
+#[test]
+fn baking_is_deterministic() {
+    let l = lobe(0.1, 0.3, 30.0, true);
+    assert_eq!(bake(&l), bake(&l));
+}
