@@ -33,6 +33,10 @@ pub const LOOKUP_MARGIN: f32 = 1.0 / 65536.0;
 /// (grazing views, where the term is then 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Table {
+    /// `(cos γ, sin γ)` of the table's frame about the normal: the lookup's view slope is
+    /// `((c ω_x + s ω_y) / ω_z, (c ω_y − s ω_x) / ω_z)` in `f32` ([`Table::slope`]), so that the
+    /// grid's axes can follow a lobe's tilt. `[1, 0]` for a radial table.
+    pub rotation: [f32; 2],
     /// The grid's nodes along `V_x` and `V_y`, increasing, exact in `f32`. A lobe whose `E`
     /// depends on `|V|` alone (isotropic, untilted) has one node along `V_y` and `xs` runs over
     /// `|V|` ([`Table::radial`]).
@@ -55,13 +59,23 @@ impl Table {
         self.ys.len() == 1
     }
 
+    /// The lookup coordinates of a unit `ω` of the local frame with `ω_z > 0`, in `f32` in this
+    /// order of operations (the shaders and the exports compute the same): `(|V|, 0)` for a radial
+    /// table, else the view slope in the table's frame.
+    pub fn slope(&self, w: [f32; 3]) -> (f32, f32) {
+        if self.radial() {
+            return ((w[0] * w[0] + w[1] * w[1]).sqrt() / w[2], 0.0);
+        }
+        let [c, s] = self.rotation;
+        ((c * w[0] + s * w[1]) / w[2], (c * w[1] - s * w[0]) / w[2])
+    }
+
     /// `Ê(ω)` for a unit `ω` of the local frame, in `f32` as every evaluator computes it.
     pub fn albedo(&self, w: [f32; 3]) -> f32 {
         if !(w[2] > 0.0) {
             return 1.0;
         }
-        let (x, y) =
-            if self.radial() { ((w[0] * w[0] + w[1] * w[1]).sqrt() / w[2], 0.0) } else { (w[0] / w[2], w[1] / w[2]) };
+        let (x, y) = self.slope(w);
         let nx = self.xs.len();
         let Some((i, a)) = cell(&self.xs, x) else { return 1.0 };
         if self.radial() {

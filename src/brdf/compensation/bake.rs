@@ -334,7 +334,7 @@ pub fn bake(l: &Lobe) -> Table {
             }
         })
         .collect();
-    let mut t = Table { xs, ys, values, mean: 1.0, scale: 0.0, deficit: 0.0 };
+    let mut t = Table { rotation: [1.0, 0.0], xs, ys, values, mean: 1.0, scale: 0.0, deficit: 0.0 };
     t.mean = mean_lower(&t).clamp(0.0, 1.0);
     let deficit = 1.0 - t.mean;
     // Rounded down, and a few ulps more for the two f32 products of `Table::term`.
