@@ -6,6 +6,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, rgba32f) writeonly uniform image2D accum;
 #define MATERIAL_BINDING 1
+#define TABLES_BINDING 2
 #include "material.glsl"
 
 void main() {

@@ -14,6 +14,7 @@ layout(set = 0, binding = 1, rgba32f) uniform image2D accum;
 layout(set = 0, binding = 2) uniform sampler2D env_tex;
 #define MATERIAL_BINDING 3
 #define MATERIAL_UNIFORM
+#define TABLES_BINDING 9
 #include "material.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer Qmc { vec4 v[]; } qmc; // 2 per sample
 layout(std430, set = 0, binding = 5) readonly buffer Marginal { float v[]; } marginal;

@@ -106,6 +106,31 @@ impl Table {
     }
 }
 
+/// Words of a lobe's header in [`words`].
+pub const HEADER_WORDS: usize = 8;
+
+/// The tables of a material's lobes as the shaders and the GLSL exports read them
+/// (`glsl/include/brdf.glsl`, `brdf_table_albedo`; docs/formats.md, Compensation tables): for lobe
+/// `k` a header of [`HEADER_WORDS`] words at `8k` (the offset of its table, `nx`, `ny`, the frame's
+/// `cos γ` and `sin γ` and the term's scale as `f32` bits, two zeros), then each table's `xs`, `ys`
+/// and `values` as `f32` bits. A lobe without a table (`None`: not baked yet) has `nx = 0`: the
+/// shaders read `Ê = 1` and the term 0. At least one word, so the buffer is never empty.
+pub fn words(tables: &[Option<&Table>]) -> Vec<u32> {
+    let mut out = vec![0u32; (HEADER_WORDS * tables.len()).max(1)];
+    for (k, t) in tables.iter().enumerate() {
+        let Some(t) = t else { continue };
+        let h = HEADER_WORDS * k;
+        out[h] = out.len() as u32;
+        out[h + 1] = t.xs.len() as u32;
+        out[h + 2] = t.ys.len() as u32;
+        out[h + 3] = t.rotation[0].to_bits();
+        out[h + 4] = t.rotation[1].to_bits();
+        out[h + 5] = t.scale.to_bits();
+        out.extend(t.xs.iter().chain(&t.ys).chain(&t.values).map(|v| v.to_bits()));
+    }
+    out
+}
+
 /// The cell `i` of the increasing nodes `nodes` that holds `x` and the weight of its far node
 /// (`nodes[i + 1]`), in `f32`; `None` off the nodes (or for NaN).
 fn cell(nodes: &[f32], x: f32) -> Option<(usize, f32)> {
@@ -150,14 +175,38 @@ fn cache() -> &'static Mutex<HashMap<Key, Slot>> {
 
 /// Lobe `l`'s table, baked once per shape: threads asking for the same shape wait for one bake.
 pub fn table(l: &Lobe) -> Arc<Table> {
-    let slot = {
-        let mut map = cache().lock().unwrap_or_else(|e| e.into_inner());
-        if map.len() >= CACHE_TABLES {
-            map.clear();
-        }
-        map.entry(Key::of(l)).or_default().clone()
-    };
-    slot.get_or_init(|| Arc::new(bake(l))).clone()
+    slot(l).get_or_init(|| Arc::new(bake(l))).clone()
+}
+
+/// The cache's slot of lobe `l`'s shape.
+fn slot(l: &Lobe) -> Slot {
+    let mut map = cache().lock().unwrap_or_else(|e| e.into_inner());
+    if map.len() >= CACHE_TABLES {
+        map.clear();
+    }
+    map.entry(Key::of(l)).or_default().clone()
+}
+
+/// Lobe `l`'s table if it is baked. If not, a thread of its own bakes it and then calls `done` — one
+/// such thread at a time: while it runs, other lobes wait for the next call (a modify-brush drag asks
+/// for a new shape every frame; only the shape asked for when a bake ends is baked next).
+pub fn table_or_bake(l: &Lobe, done: impl FnOnce() + Send + 'static) -> Option<Arc<Table>> {
+    static BAKING: Mutex<bool> = Mutex::new(false);
+    let slot = slot(l);
+    if let Some(t) = slot.get() {
+        return Some(t.clone());
+    }
+    let mut baking = BAKING.lock().unwrap_or_else(|e| e.into_inner());
+    if !*baking {
+        *baking = true;
+        let lobe = l.clone();
+        std::thread::spawn(move || {
+            slot.get_or_init(|| Arc::new(bake(&lobe)));
+            *BAKING.lock().unwrap_or_else(|e| e.into_inner()) = false;
+            done();
+        });
+    }
+    None
 }
 
 /// The views of the white furnace `check` reports: the polar angles of `energy::THETA_SET_DEG` up

@@ -17,10 +17,12 @@ impl CanvasPass {
         Ok(CanvasPass { pipeline })
     }
 
-    pub fn record(&self, rec: &Recording<'_>, material: &Buffer) -> Result<()> {
+    /// `tables`: the compensation tables (`compensation::words`).
+    pub fn record(&self, rec: &Recording<'_>, material: &Buffer, tables: &Buffer) -> Result<()> {
         let t = rec.targets;
         t.start_accum(rec.ctx, rec.cmd);
-        let set = rec.set(&self.pipeline, &[Binding::StorageImage(&t.accum), Binding::StorageRead(material)])?;
+        let bindings = [Binding::StorageImage(&t.accum), Binding::StorageRead(material), Binding::StorageRead(tables)];
+        let set = rec.set(&self.pipeline, &bindings)?;
         rec.dispatch(&self.pipeline, set, &rec.push);
         Ok(())
     }

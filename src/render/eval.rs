@@ -21,7 +21,8 @@ impl EvalPass {
     }
 
     /// The same pass from other SPIR-V with `eval.comp`'s interface (binding 0 the pairs, 1 the
-    /// values, 2 the material buffer, which it may leave unused; push constant `uint count`; 64
+    /// values, 2 the material buffer and 3 its compensation tables, which it may leave unused; push
+    /// constant `uint count`; 64
     /// invocations a group): how the tests run exported GLSL (`brdf-shop export`) on the device.
     pub fn from_spirv(ctx: &Context, spv: &[u8], name: &str) -> Result<EvalPass> {
         Ok(EvalPass { pipeline: Pipeline::compute(ctx, spv, name, 4, &[])? })
@@ -42,9 +43,18 @@ impl EvalPass {
             made.push(Buffer::upload(ctx, bytemuck::cast_slice(&data), usage, "eval.pairs")?);
             made.push(Buffer::new(ctx, 16 * n as u64, usage, MemoryLocation::GpuToCpu, "eval.values")?);
             made.push(Buffer::upload(ctx, &super::gpu::material_bytes(material), usage, "eval.material")?);
+            let tables = material.tables().unwrap_or_default();
+            let tables: Vec<Option<&crate::brdf::compensation::Table>> = tables.iter().map(|t| Some(&**t)).collect();
+            let words = crate::brdf::compensation::words(&tables);
+            made.push(Buffer::upload(ctx, bytemuck::cast_slice(&words), usage, "eval.tables")?);
             let p = descriptor::pool(ctx, 1, "eval.descriptors")?;
             pool = Some(p);
-            let bindings = [Binding::StorageRead(&made[0]), Binding::Storage(&made[1]), Binding::StorageRead(&made[2])];
+            let bindings = [
+                Binding::StorageRead(&made[0]),
+                Binding::Storage(&made[1]),
+                Binding::StorageRead(&made[2]),
+                Binding::StorageRead(&made[3]),
+            ];
             let set = descriptor::allocate(ctx, p, self.pipeline.set_layout)?;
             self.pipeline.write_set(ctx, set, &bindings)?;
             ctx.commands.run(&ctx.device, |cmd| {

@@ -99,7 +99,7 @@ pub fn material_bytes(m: &Material) -> Vec<u8> {
                 Normalization::Reciprocal => 2,
             },
             u32::from(m.is_symmetrized()),
-            0,
+            u32::from(m.preserve_energy),
         ],
     };
     let mut lobes: Vec<GpuLobe> = m

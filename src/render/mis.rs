@@ -21,13 +21,14 @@ impl MisPass {
         Ok(MisPass { pipeline })
     }
 
-    /// Adds the estimate over samples `first..first + samples` of the `sequence` buffer (their mean).
+    /// Adds the estimate over samples `first..first + samples` of the `sequence` buffer (their mean);
+    /// the material's buffer and its compensation tables (`compensation::words`).
     pub fn record(
         &self,
         rec: &Recording<'_>,
         first: u32,
         samples: u32,
-        material: &Buffer,
+        [material, tables]: [&Buffer; 2],
         sequence: &Buffer,
     ) -> Result<()> {
         let t = rec.targets;
@@ -44,6 +45,7 @@ impl MisPass {
                 Binding::StorageRead(&env.conditional),
                 Binding::StorageRead(&env.pdf),
                 Binding::StorageRead(&t.pixels),
+                Binding::StorageRead(tables),
             ],
         )?;
         let (mut at, end) = (first, first + samples);

@@ -15,6 +15,7 @@ pub mod accumulate;
 pub mod background;
 pub mod canvas;
 pub mod compact;
+pub mod compensation;
 pub mod compose;
 pub mod denoise;
 pub mod diffuse;
@@ -59,6 +60,7 @@ pub(crate) struct Passes {
     denoise: denoise::DenoisePass,
     lobe: lobe::LobePass,
     mis: mis::MisPass,
+    compensation: compensation::CompensationPass,
     canvas: canvas::CanvasPass,
     eval: eval::EvalPass,
     accumulate: accumulate::AccumulatePass,
@@ -76,6 +78,7 @@ impl Passes {
             denoise: denoise::DenoisePass::new(ctx)?,
             lobe: lobe::LobePass::new(),
             mis: mis::MisPass::new(ctx)?,
+            compensation: compensation::CompensationPass::new(ctx)?,
             canvas: canvas::CanvasPass::new(ctx)?,
             eval: eval::EvalPass::new(ctx)?,
             accumulate: accumulate::AccumulatePass::new(ctx)?,
@@ -92,6 +95,7 @@ impl Passes {
         self.denoise.destroy(ctx);
         self.lobe.destroy(ctx);
         self.mis.destroy(ctx);
+        self.compensation.destroy(ctx);
         self.canvas.destroy(ctx);
         self.eval.destroy(ctx);
         self.accumulate.destroy(ctx);
@@ -132,6 +136,8 @@ pub struct Renderer {
     ring: Option<FrameRing>,
     halton: Option<(u32, Buffer)>,
     sequence: Option<(u32, Buffer)>,
+    /// What the frames' buffers hold for the material's compensation terms.
+    tables: compensation::Tables,
     pub ctx: Context,
 }
 
@@ -172,6 +178,7 @@ impl Renderer {
             ring: Some(ring),
             halton: None,
             sequence: None,
+            tables: compensation::Tables::default(),
             ctx,
         })
     }
@@ -266,7 +273,6 @@ impl Renderer {
 
     /// `f(ω_i, ω_o)` in `f32` on the GPU for each pair (local frame), checked for validation errors.
     pub fn eval(&self, material: &Material, pairs: &[(DVec3, DVec3)]) -> Result<Vec<[f32; 3]>> {
-        refuse_preserved_energy(material)?;
         let out = self.passes.as_ref().expect("passes live until drop").eval.run(&self.ctx, material, pairs)?;
         self.ctx.check_validation()?;
         Ok(out)
@@ -276,9 +282,13 @@ impl Renderer {
     /// the same frame ring as the editor's frames, waiting for its one frame.
     pub fn render(&mut self, material: &Material, settings: &Settings) -> Result<Frame> {
         self.check_size(settings)?;
-        self.begin_frame(material)?;
-        // A headless frame builds its pipelines at once (it has no later frame to wait for).
+        // A headless frame bakes its tables and builds its pipelines at once (it has no later frame
+        // to wait for).
         let background = self.build_in_background.take();
+        if let Err(e) = self.begin_frame(material) {
+            self.build_in_background = background;
+            return Err(e);
+        }
         let before = self.ctx.counts.now();
         let recorded = self.record_view(material, settings, Progress::Fresh, false);
         let commands = self.ctx.counts.now().since(before);
@@ -360,20 +370,33 @@ impl Renderer {
     }
 
     /// Starts a frame on the ring (waiting only for the frame that last used its slot) and writes
-    /// `material` into the frame's buffer. That earlier frame's GPU times join the finished ones
-    /// ([`Renderer::take_finished`]).
+    /// `material` into the frame's buffers, with its compensation tables: baked now, or with
+    /// [`Renderer::build_in_background`] on a thread of their own (a lobe whose table is not there
+    /// yet draws without its term; [`Renderer::tables_complete`] says). That earlier frame's GPU
+    /// times join the finished ones ([`Renderer::take_finished`]).
     pub fn begin_frame(&mut self, material: &Material) -> Result<()> {
-        refuse_preserved_energy(material)?;
         let n = material.lobes.len() as u32;
+        let (words, kernels) = self.tables.update(material, self.build_in_background.as_ref());
         let ring = self.ring.as_mut().expect("ring lives until drop");
-        // Passes: G-buffer, background, diffuse, a pass per lobe, denoise, canvas, compose, and the
-        // caller's window copy and panel (refinement frames have fewer).
-        ring.begin(&self.ctx, 8 + n, 10 + n, self.time_passes)?;
-        if let Err(e) = ring.current().upload(&self.ctx, "material", &gpu::material_bytes(material)) {
+        // Passes: G-buffer, background, diffuse, a pass per lobe, denoise, compensation, canvas,
+        // compose, and the caller's window copy and panel (refinement frames have fewer).
+        ring.begin(&self.ctx, 9 + n, 11 + n, self.time_passes)?;
+        let frame = ring.current();
+        let uploaded = frame
+            .upload(&self.ctx, "material", &gpu::material_bytes(material))
+            .and_then(|()| frame.upload(&self.ctx, "tables", words))
+            .and_then(|()| frame.upload(&self.ctx, "kernels", kernels));
+        if let Err(e) = uploaded {
             let _ = ring.abandon(&self.ctx);
             return Err(e);
         }
         Ok(())
+    }
+
+    /// Whether the frame begun last had every compensation table of its material (a lobe's table
+    /// is baked on a thread of its own with [`Renderer::build_in_background`]).
+    pub fn tables_complete(&self) -> bool {
+        self.tables.complete()
     }
 
     /// Submits the frame begun by [`Renderer::begin_frame`] (waiting on `wait` at its stage,
@@ -474,17 +497,4 @@ impl Drop for Renderer {
             b.1.destroy(&self.ctx);
         }
     }
-}
-
-/// The GPU passes draw the lobes without their energy compensation (`brdf::compensation`): an
-/// energy-preserving material is refused rather than drawn darker than it is. `reference`, `eval`
-/// and `check` evaluate it.
-fn refuse_preserved_energy(material: &Material) -> Result<()> {
-    if material.preserve_energy {
-        return Err(crate::Error::input(
-            "material",
-            "preserve_energy: the GPU renderer draws no energy compensation; `reference`, `eval` and `check` evaluate it",
-        ));
-    }
-    Ok(())
 }

@@ -389,6 +389,7 @@ impl Renderer {
             rec,
             passes: self.passes.as_ref().expect("passes live until drop"),
             material: buffers.get("material").expect("written by begin_frame"),
+            compensation: ["tables", "kernels"].map(|n| buffers.get(n).expect("written by begin_frame")),
             light_samples: light_counts
                 .map(|(n, c)| steps::light_set(buffers.get("keylights.frame").expect("written above"), 0, n, c)),
             tiles: buffers.get("keylights.tiles").filter(|_| !tiles.is_empty()),

@@ -136,6 +136,9 @@ pub enum Pass {
     /// The rough lobes' filter: sparse or dense, over lobes of `min(α)` ≥ `min_alpha`, adding the
     /// deferred diffuse term where the compact pass left it.
     Denoise { min_alpha: f64, sparse: bool, diffuse: Option<([f64; 3], bool)> },
+    /// The lobes' energy compensation terms (an energy-preserving material), over the listed pixels;
+    /// `key`: the residual map's coefficients plus the key lights, as the diffuse term takes them.
+    Compensation { key: bool },
     /// The whole material by multiple importance sampling, samples `offset..offset + samples`.
     Mis { offset: u32, samples: u32 },
     /// Add the frame into the refinement's running sum (`first`: start it).
@@ -240,6 +243,12 @@ fn diffuse_term(r: &Request) -> Option<([f64; 3], bool)> {
         .then_some((r.material.diffuse, r.estimator == Estimator::Key))
 }
 
+/// Whether a frame of `r` draws the lobes' energy compensation terms (`mis` evaluates them with the
+/// whole material).
+fn compensated(r: &Request) -> bool {
+    r.estimator != Estimator::Mis && r.material.preserve_energy && r.material.lobes.iter().any(|l| l.albedo != [0.0; 3])
+}
+
 /// Whether the G-buffer's pass may cull back faces: exact only for an eye outside the mesh's
 /// bounding sphere (radius 1, the mesh is normalised) by more than the farthest point of the
 /// frustum in front of the near plane.
@@ -260,7 +269,7 @@ fn start(r: &Request, lobes: &[LobeStep], p: &mut Plan) {
     // and writes every listed pixel anyway.
     let later = p.raster && r.device.clear_then_later && p.sparse && !mis && lobes.iter().any(cells);
     // Whether a pass of this frame runs over the list of pixels (the others run over the blocks).
-    let over_pixels = mis || lobes.iter().any(|l| !cells(l));
+    let over_pixels = mis || lobes.iter().any(|l| !cells(l)) || compensated(r);
     let start = if later { Start::Later { pixels: over_pixels } } else { Start::Here(diffuse) };
     if p.raster {
         let cull = culls(r.camera, r.width, r.height, r.options);
@@ -345,5 +354,13 @@ fn shade(r: &Request, lobes: Vec<LobeStep>, p: &mut Plan) {
             _ => "only the `key` estimator filters",
         };
         p.leave_out("zero, denoise", why);
+    }
+    if compensated(r) {
+        let why = "the material preserves energy: each lobe's compensation term (SH9 of the map)";
+        p.run(Pass::Compensation { key: r.estimator == Estimator::Key }, why);
+    } else if r.material.normalization == crate::brdf::Normalization::Reciprocal {
+        let why =
+            if r.material.preserve_energy { "no lobe has albedo" } else { "the material does not preserve energy" };
+        p.leave_out("compensation", why);
     }
 }

@@ -26,6 +26,7 @@ impl Step {
             Pass::Denoise { sparse: true, diffuse: Some(_), .. } => "denoise[sparse,diffuse]".into(),
             Pass::Denoise { sparse: true, diffuse: None, .. } => "denoise[sparse]".into(),
             Pass::Denoise { sparse: false, .. } => "denoise".into(),
+            Pass::Compensation { .. } => "compensation".into(),
             Pass::Mis { .. } => "mis".into(),
             Pass::Accumulate { .. } => "accumulate".into(),
         }
@@ -47,7 +48,11 @@ impl Step {
             Pass::Zero { by_compute: false, .. } => "a transfer clear",
             Pass::Lobe(LobeStep { into: Into::Cells { .. }, .. }) => "the listed blocks",
             Pass::Denoise { sparse: true, .. } => "the listed blocks",
-            Pass::Diffuse { .. } | Pass::Lobe(_) | Pass::Denoise { .. } | Pass::Mis { .. } => "the listed pixels",
+            Pass::Diffuse { .. }
+            | Pass::Lobe(_)
+            | Pass::Denoise { .. }
+            | Pass::Compensation { .. }
+            | Pass::Mis { .. } => "the listed pixels",
         }
     }
 
@@ -73,6 +78,7 @@ impl Step {
             | Pass::Background
             | Pass::Diffuse { .. }
             | Pass::Denoise { .. }
+            | Pass::Compensation { .. }
             | Pass::Mis { .. } => "the image",
         }
     }
@@ -98,6 +104,9 @@ impl Step {
                 if *key { "SH9 of the residual plus the key lights" } else { "SH9 irradiance" }.into()
             }
             Pass::Lobe(l) => lobe_words(l),
+            Pass::Compensation { key } => {
+                if *key { "SH9 of the residual plus the key lights" } else { "SH9 of the map" }.into()
+            }
             Pass::Denoise { min_alpha, diffuse, .. } => {
                 let d = if diffuse.is_some() { ", adds the diffuse term" } else { "" };
                 format!("lobes of α ≥ {min_alpha:.3}{d}")

@@ -22,6 +22,8 @@ pub struct StepRecorder<'a> {
     pub rec: Recording<'a>,
     pub passes: &'a Passes,
     pub material: &'a Buffer,
+    /// The compensation tables' words and the kernels (`render::compensation::Tables`).
+    pub compensation: [&'a Buffer; 2],
     /// The frame's light samples, where a lobe takes them by MIS.
     pub light_samples: Option<LightSet<'a>>,
     /// The lobes' tile sets, one uniform block each in the order of the plan's lobes.
@@ -59,7 +61,7 @@ impl StepRecorder<'_> {
         let (rec, p) = (&self.rec, self.passes);
         let (ctx, cmd, pool, targets) = (rec.ctx, rec.cmd, rec.pool, rec.targets);
         match &step.pass {
-            Pass::Canvas => p.canvas.record(rec, self.material),
+            Pass::Canvas => p.canvas.record(rec, self.material, self.compensation[0]),
             Pass::GBuffer { cull, start, background_blocks } => {
                 let mesh = self.mesh.ok_or_else(|| missing("a mesh"))?;
                 p.gbuffer.record(ctx, cmd, targets, mesh, &self.view_proj, *cull);
@@ -98,9 +100,13 @@ impl StepRecorder<'_> {
             Pass::Denoise { min_alpha, sparse, diffuse } => {
                 p.denoise.record(rec, *min_alpha, self.spp, *sparse, *diffuse)
             }
+            Pass::Compensation { key } => {
+                let [tables, kernels] = self.compensation;
+                p.compensation.record(rec, [self.material, tables, kernels], *key)
+            }
             Pass::Mis { offset, samples } => {
                 let seq = self.sequence.ok_or_else(|| missing("the mis sequence"))?;
-                p.mis.record(rec, *offset, *samples, self.material, seq)
+                p.mis.record(rec, *offset, *samples, [self.material, self.compensation[0]], seq)
             }
             Pass::Accumulate { first, samples } => {
                 // The accumulate pass reads the frame's image outside the view's derived barriers.
