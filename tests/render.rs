@@ -11,6 +11,8 @@ mod common;
 mod filter;
 #[path = "render/frames.rs"]
 mod frames;
+#[path = "render/furnace.rs"]
+mod furnace;
 #[path = "render/key.rs"]
 mod key;
 

@@ -187,6 +187,11 @@ fn slot(l: &Lobe) -> Slot {
     map.entry(Key::of(l)).or_default().clone()
 }
 
+/// Whether lobe `l`'s table is baked (without baking it).
+pub fn baked(l: &Lobe) -> bool {
+    slot(l).get().is_some()
+}
+
 /// Lobe `l`'s table if it is baked. If not, a thread of its own bakes it and then calls `done` — one
 /// such thread at a time: while it runs, other lobes wait for the next call (a modify-brush drag asks
 /// for a new shape every frame; only the shape asked for when a bake ends is baked next).

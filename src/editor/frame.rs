@@ -25,6 +25,9 @@ pub(super) struct MeshKey {
     spp: u32,
     /// The backdrop's blur (its mip level's bits): the mesh view reads the map at it.
     blur: u64,
+    /// Every compensation table of the material was there (`brdf::compensation::baked`): a view
+    /// drawn while one was being baked is drawn again once it is.
+    tables: bool,
 }
 
 /// What a presented frame drew, for its statistics and the preview's model.
@@ -47,6 +50,7 @@ pub(super) struct CanvasKey {
     material: u64,
     light: [f64; 4],
     side: u32,
+    tables: bool,
 }
 
 /// What a frame renders and what kind of frame it is, decided before anything is recorded
@@ -143,6 +147,20 @@ fn graph_rect(l: &Layout, pixels_per_point: f32) -> egui::Rect {
 }
 
 impl App {
+    /// Follows the compensation tables of the frames drawn (the views were drawn without the terms
+    /// of lobes whose tables are baking): times each wait, from the first frame drawn without a
+    /// table to the first with them all (`--frame-stats`).
+    fn note_tables(&mut self, complete: bool) {
+        match (self.tables_pending, complete) {
+            (None, false) => self.tables_pending = Some(std::time::Instant::now()),
+            (Some(since), true) => {
+                self.tables_pending = None;
+                self.table_waits.push(since.elapsed().as_secs_f64() * 1e3);
+            }
+            _ => {}
+        }
+    }
+
     /// What this frame renders: the mesh view restarts (any change of what it shows), refines
     /// (nothing changed, refinement on and not done) or stays; the canvas re-renders only when the
     /// material or its light changed. Views that change are previewed smaller when the frame budget
@@ -250,6 +268,8 @@ impl App {
     fn keys(&self, state: &State, l: &Layout) -> (MeshKey, CanvasKey) {
         let generation = state.history.generation();
         let light = state.settings.canvas.light;
+        let m = state.material();
+        let tables = !m.preserve_energy || m.lobes.iter().all(crate::brdf::compensation::baked);
         let mesh = MeshKey {
             material: generation,
             scene: self.scene_generation,
@@ -257,11 +277,13 @@ impl App {
             size: (l.mesh_w, l.height),
             spp: self.spp,
             blur: state.backdrop.blur.to_bits(),
+            tables,
         };
         let canvas = CanvasKey {
             material: generation,
             light: [light.x, light.y, light.z, state.settings.canvas.intensity],
             side: l.canvas,
+            tables,
         };
         (mesh, canvas)
     }
@@ -401,6 +423,8 @@ impl App {
         match gpu.frame(&plan)? {
             Shown::Presented { pixels, mesh } => {
                 self.mesh_waiting = mesh == Recorded::Waiting;
+                let complete = gpu.renderer.tables_complete();
+                self.note_tables(complete);
                 if !self.mesh_waiting {
                     self.mesh_key = Some(d.mesh_key.clone());
                     if d.mesh.is_some() {

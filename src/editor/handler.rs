@@ -176,9 +176,10 @@ impl ApplicationHandler for App {
                 el.set_control_flow(ControlFlow::WaitUntil(at));
             }
         }
-        // A mesh view waiting for a lobe pipeline is drawn again when the build wakes the loop
-        // (`user_event`); until then it neither refines nor quits.
-        if self.mesh_waiting {
+        // A mesh view waiting for a lobe pipeline, or views drawn while a compensation table was
+        // baking, are drawn again when the build or the bake wakes the loop (`user_event`); until
+        // then they neither refine nor quit.
+        if self.mesh_waiting || self.tables_pending.is_some() {
             return;
         }
         // Idle: first render the previewed views at full size (a light dragged on a refined view

@@ -99,6 +99,11 @@ struct App {
     /// The mesh view waits for a lobe pipeline being built in the background (it shows its last
     /// image; the build's end wakes the loop).
     mesh_waiting: bool,
+    /// Since when the views drawn lack a compensation table being baked (`None`: they lack none).
+    tables_pending: Option<std::time::Instant>,
+    /// Each wait for compensation tables, ms, from the first frame drawn without one to the first
+    /// with them all (`--frame-stats`).
+    table_waits: Vec<f64>,
     canvas_key: Option<CanvasKey>,
     /// The BRDF graph's curves and what they were computed for.
     curves: Option<(CanvasKey, graph::Curves)>,

@@ -231,6 +231,9 @@ fn material_controls(ui: &mut egui::Ui, edited: &mut Material) -> bool {
     }
     if form != Normalization::Reciprocal {
         changed |= ui.checkbox(&mut edited.symmetrize, "symmetrise (exact reciprocity, not bounded)").changed();
+    } else {
+        let text = "preserve energy (each lobe reflects its albedo)";
+        changed |= ui.checkbox(&mut edited.preserve_energy, text).changed();
     }
     changed |= colour(ui, "diffuse", &mut edited.diffuse);
     ui.separator();

@@ -139,6 +139,8 @@ impl App {
             done: false,
             mesh_key: None,
             mesh_waiting: false,
+            tables_pending: None,
+            table_waits: Vec::new(),
             canvas_key: None,
             curves: None,
             frame_ms: Vec::new(),
@@ -194,7 +196,14 @@ impl App {
             let size = (state.layout.width, state.layout.height);
             let refined = self.gpu.as_ref().map_or(0, |g| g.renderer.refined_samples());
             let views = stats::views_json(state, (self.env_summary.exposure, self.env_backdrop), self.spp, refined);
-            let json = stats::frame_stats_json(&device, size, &self.frame_stats, self.skipped_minimised, views);
+            let json = stats::frame_stats_json(
+                &device,
+                size,
+                &self.frame_stats,
+                &self.table_waits,
+                self.skipped_minimised,
+                views,
+            );
             crate::fsio::write_atomic(p, json.as_bytes())?;
         }
         Ok(())

@@ -44,7 +44,10 @@ impl FrameStat {
 /// `{"device", "size": [W, H], "frames": [{"kind", "scale", "spp", "wall_ms", "gpu_ms", "frame_ms", "untimed_ms",
 /// "passes": [{"name", "ms"}]}], "interaction": {"frames", "median_wall_ms", "median_gpu_ms", "median_frame_ms",
 /// "median_untimed_ms", "median_wall_over_gpu", "median_wall_over_frame"},
-/// "settle": {…}, "refinement": {…}, "waiting": {…}, "skipped_minimised": N, "views": …}` — `waiting`
+/// "settle": {…}, "refinement": {…}, "waiting": {…}, "compensation": {"waits", "median_ms", "max_ms"},
+/// "skipped_minimised": N, "views": …}` — `compensation` times the waits for an energy-preserving
+/// material's compensation tables (from the first frame drawn without one of them to the first
+/// with them all: the latency from a stroke to its compensated image); `waiting`
 /// frames are those whose mesh view waited for a lobe pipeline built in the background; `skipped_minimised` counts the redraws
 /// that drew nothing because the window was minimised; `views` says where the last frame put the mesh view and the
 /// canvas and how (camera, exposure, light), so that a headless render can reproduce them. `gpu_ms` is the sum of
@@ -53,6 +56,7 @@ pub fn frame_stats_json(
     device: &str,
     size: (u32, u32),
     frames: &[FrameStat],
+    table_waits: &[f64],
     skipped_minimised: u64,
     views: serde_json::Value,
 ) -> String {
@@ -87,6 +91,12 @@ pub fn frame_stats_json(
                 "median_wall_over_gpu": ratio(|f| f.gpu_ms),
                 "median_wall_over_frame": ratio(|f| f.frame_ms) })
     };
+    let compensation = if table_waits.is_empty() {
+        json!({ "waits": 0 })
+    } else {
+        json!({ "waits": table_waits.len(), "median_ms": crate::measure::stats(table_waits).0,
+                "max_ms": table_waits.iter().copied().fold(0.0, f64::max) })
+    };
     let list: Vec<_> = frames
         .iter()
         .map(|f| {
@@ -99,6 +109,7 @@ pub fn frame_stats_json(
                       "interaction": summary(FrameKind::Interaction),
                       "settle": summary(FrameKind::Settle), "refinement": summary(FrameKind::Refinement),
                       "waiting": summary(FrameKind::Waiting),
+                      "compensation": compensation,
                       "skipped_minimised": skipped_minimised, "views": views });
     let mut s = serde_json::to_string_pretty(&doc).expect("plain JSON");
     s.push('\n');
