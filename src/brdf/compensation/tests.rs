@@ -2,7 +2,7 @@
 
 use glam::{DQuat, DVec3};
 
-use super::bake::{is_radial, nodes, NODES, V_MAX};
+use super::nodes::{axes, facets, frame, is_radial, radial_nodes, NODES, V_MAX};
 use super::{bake, Table};
 use crate::brdf::energy::facet_term_albedo;
 use crate::brdf::Lobe;
@@ -38,12 +38,20 @@ fn view(theta_deg: f64, phi_deg: f64) -> DVec3 {
 
 #[test]
 fn nodes_are_increasing_and_reach_the_table_s_edge() {
-    for radial in [false, true] {
-        let n = nodes(radial);
-        assert_eq!(n.len(), NODES);
-        assert!(n.windows(2).all(|w| w[0] < w[1]), "{n:?}");
-        assert!((f64::from(n[NODES - 1]) - V_MAX).abs() < 1e-5, "{n:?}");
-        assert_eq!(n[0], if radial { 0.0 } else { -n[NODES - 1] });
+    let n = radial_nodes();
+    assert_eq!(n.len(), NODES);
+    assert!(n.windows(2).all(|w| w[0] < w[1]), "{n:?}");
+    assert!((f64::from(n[NODES - 1]) - V_MAX).abs() < 1e-4 * V_MAX, "{n:?}");
+    assert_eq!(n[0], 0.0);
+    for l in [lobe(0.1, 0.5, 0.0, false), lobe(0.05, 0.05, 40.0, true)] {
+        let (frames, count) = l.facet_frames();
+        let fs: Vec<_> = frames[..count].iter().map(|&q| facets(&l, q, frame(&l))).collect();
+        let (xs, ys) = axes(&fs, l.alpha_x.max(l.alpha_y));
+        for n in [&xs, &ys] {
+            assert!(n.len() >= NODES && n.windows(2).all(|w| w[0] < w[1]), "{n:?}");
+            assert!((f64::from(n[n.len() - 1]) - V_MAX).abs() < 1e-4 * V_MAX, "{n:?}");
+            assert!((f64::from(n[0]) + V_MAX).abs() < 1e-4 * V_MAX, "{n:?}");
+        }
     }
 }
 
