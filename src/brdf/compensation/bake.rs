@@ -13,7 +13,7 @@
 //! Gaussian's mass past `±L` counted as `g = 1`), a cell's corner sums bound `E` on the cell by
 //! their bilinear interpolant; each node takes the largest over the cells it is a corner of, so
 //! the table's interpolant is at least `E` on every cell. Boxes are split while their certified
-//! gap exceeds [`ETA`] (see [`cell_sums`]).
+//! gap exceeds [`ETA`] ([`ETA_GRAZING`] past 81°; see [`cell_sums`]).
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
@@ -34,6 +34,10 @@ pub const ETA: f64 = 1.0e-4;
 /// while splitting shrinks that part (summed over the four children) below this fraction of the
 /// parent's.
 const VIEW_RATIO: f64 = 0.6;
+/// The same for cells wholly past 81° from the normal (`|V| > tan 81°`): their looseness only
+/// lowers `Ē`, and `Ē`'s bound and the measured deficit fall together.
+pub const ETA_GRAZING: f64 = 1.0e-3;
+const TAN_81: f64 = 6.313751514675043;
 /// The most rounds of box splitting a cell takes.
 const MAX_ROUNDS: usize = 30;
 /// The most box evaluations a cell takes (past it no box is split): caps a stiff lobe's bake.
@@ -46,7 +50,7 @@ const CELL_EVALS: usize = 4000;
 /// that splitting can shrink, or in the rest while the previous split shrank it enough
 /// ([`VIEW_RATIO`]); the others are kept (their weights summed). Past [`CELL_EVALS`] the boxes
 /// with the largest gaps are split first and the rest kept.
-fn cell_sums(f: &Facets, corners: &[[f64; 2]; 4], n: usize) -> ([f64; 4], usize) {
+fn cell_sums(f: &Facets, corners: &[[f64; 2]; 4], n: usize, eta: f64) -> ([f64; 4], usize) {
     let mut pending: Vec<(Box2, f64)> = Vec::with_capacity(64);
     for x in EDGES.windows(2) {
         for y in EDGES.windows(2) {
@@ -77,7 +81,7 @@ fn cell_sums(f: &Facets, corners: &[[f64; 2]; 4], n: usize) -> ([f64; 4], usize)
             for k in 0..group {
                 let r = &results[g * group + k];
                 let view = (r.gap - r.split_gap).max(0.0);
-                if r.split_gap > ETA || (view > ETA && helps) {
+                if r.split_gap > eta || (view > eta && helps) {
                     cand.push((g * group + k, r.gap));
                 }
             }
@@ -137,11 +141,14 @@ fn certify(f: &Facets, xs: &[f32], ys: &[f32]) -> (Vec<f64>, usize) {
         .par_iter()
         .map(|&(i, j)| {
             let (x0, x1) = (f64::from(xs[i]), f64::from(xs[i + 1]));
+            let near = |a: f64, b: f64| 0.0f64.clamp(a, b);
             if radial {
-                cell_sums(f, &[[x0, 0.0], [x1, 0.0], [0.0; 2], [0.0; 2]], 2)
+                let eta = if x0 > TAN_81 { ETA_GRAZING } else { ETA };
+                cell_sums(f, &[[x0, 0.0], [x1, 0.0], [0.0; 2], [0.0; 2]], 2, eta)
             } else {
                 let (y0, y1) = (f64::from(ys[j]), f64::from(ys[j + 1]));
-                cell_sums(f, &[[x0, y0], [x1, y0], [x1, y1], [x0, y1]], 4)
+                let eta = if near(x0, x1).hypot(near(y0, y1)) > TAN_81 { ETA_GRAZING } else { ETA };
+                cell_sums(f, &[[x0, y0], [x1, y0], [x1, y1], [x0, y1]], 4, eta)
             }
         })
         .collect();
