@@ -18,16 +18,19 @@ use glam::DVec3;
 use super::material::Lobe;
 
 mod bake;
+mod bounds;
+mod nodes;
 #[cfg(test)]
 mod tests;
 
 pub use bake::bake;
 
-/// What the f32 lookup may lose against the interpolant it computes (the view slope and the
-/// bilinear weights rounded to `f32`; `E` moves by at most `|ΔV|` over a view slope step `ΔV`):
-/// added to every lookup, it keeps `Ê ≥ E` through the rounding (docs/model.md, Energy
-/// preservation, The certificate).
-pub const LOOKUP_MARGIN: f32 = 1.0 / 65536.0;
+/// What the f32 lookup may lose against the interpolant it computes: the view slope in `f32`
+/// (a few ulps of `|V| ≤ tan 89° < 58`, and the `f32` frame's `c² + s²` off 1 by an ulp or two)
+/// moves `E` by at most `|ΔV|` (`|∇_V E| ≤ 1`: `|∇_V f_h| = 2 |(p, q)| / (1 + p² + q²) ≤ 1`), the
+/// bilinear weights and sums in `f32` a few ulps of 1: added to every lookup, it keeps `Ê ≥ E`
+/// through the rounding (docs/model.md, Energy preservation, The certificate).
+pub const LOOKUP_MARGIN: f32 = 1.0 / 16384.0;
 
 /// `Ê` of one lobe: node values over the view slope, bilinear between them, and 1 off the grid
 /// (grazing views, where the term is then 0).

@@ -1,224 +1,135 @@
 //! The certified table of `Ê ≥ E` (docs/model.md, Energy preservation, The certificate).
 //!
 //! A facet lobe's albedo per unit albedo is `E(V) = ∫ g_h(V) dP(h)`: `P` the Gaussian of the facet
-//! slopes (standard normal `X, Y` with `h ∝ M (X, Y, 1)`, [`matrix`]) and, for the view slope `V`,
-//! `g_h(V) = clamp(f_h(V), 0, 1)`, `f_h(V) = 2 (1 + p V_x + q V_y) / (1 + p² + q²) − 1` with `(p, q)`
-//! the world slopes of `h` (`f_h + 1 = 2 h_z (h·ω_o) / ω_z`: `g` is `cos θ_i / cos θ_o` clamped, 0
-//! where the reflected direction is under the horizon). `f_h` is affine in `V`, so for `χ ∈ {0, 1}`
-//! `g_h ≤ max(0, f_h) − χ (f_h − 1)`, whose integral over a box `b` of slopes is convex in `V`; a
-//! convex function on a rectangle is at most the bilinear interpolant of its corner values. So on
-//! a table cell with corner views `n_i`, `∫_b g dP ≤ Σ λ_i w_{b,i}` with `w_{b,i}` a bound of that
-//! integral at `n_i`: `P_b max(0, S_b(n_i))` (`χ = 0`), `P_b (max(0, S_b(n_i)) + 1 − I_b(n_i))`
-//! (`χ = 1`) or `P_b` (`g ≤ 1`), with `S_b, I_b` bounds of `f_h(n_i)` over the box (exact where the
-//! box is saturated at all four corners). Summed over boxes that cover the slopes (the Gaussian's
-//! mass past `±L` counted as `g = 1`), a cell's corner sums bound `E` on the cell by their
-//! bilinear interpolant; each node takes the largest over the cells it is a corner of, so the
-//! table's interpolant is at least `E` on every cell. Boxes are split where their bounds are
-//! loose, until a cell's slack is under [`CELL_SLACK`].
+//! slopes (standard normal `X, Y` with `h ∝ M (X, Y, 1)`, [`nodes::facets`]) and, for the view slope
+//! `V` in the table's frame, `g_h(V) = clamp(f_h(V), 0, 1)`, `f_h(V) = 2 (1 + p V_x + q V_y) /
+//! (1 + p² + q²) − 1` with `(p, q)` the slopes of `h` (`f_h + 1 = 2 h_z (h·ω_o) / ω_z`: `g` is
+//! `cos θ_i / cos θ_o` clamped, 0 where the reflected direction is under the horizon). `f_h` is
+//! affine in `V`, so for `χ ∈ {0, 1}` `g_h ≤ max(0, f_h) − χ (f_h − 1)`, whose integral over a box
+//! `b` of slopes is convex in `V`; a convex function on a rectangle is at most the bilinear
+//! interpolant of its corner values. So on a table cell with corner views `n_i`,
+//! `∫_b g dP ≤ Σ λ_i w_{b,i}` with `w_{b,i}` a bound of that integral at `n_i`, the same `χ` (or
+//! `g ≤ 1`) at every corner ([`bounds::weights`]). Summed over boxes that cover the slopes (the
+//! Gaussian's mass past `±L` counted as `g = 1`), a cell's corner sums bound `E` on the cell by
+//! their bilinear interpolant; each node takes the largest over the cells it is a corner of, so
+//! the table's interpolant is at least `E` on every cell. Boxes are split while their certified
+//! gap exceeds [`ETA`] ([`ETA_GRAZING`] past 81°; see [`cell_sums`]).
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
-use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 
 use super::super::material::Lobe;
+use super::bounds::{weights, Box2, Facets};
+use super::nodes::{self, is_radial};
 use super::Table;
 
-/// Nodes of the table along each view-slope axis (a radial table: along `|V|`).
-pub const NODES: usize = 33;
-/// The view slope the table reaches along each axis: `tan 85°`. Past it `Ê = 1`.
-pub const V_MAX: f64 = 11.430052302761343;
-/// Where the nodes thin out: node `k` is at `C s / (1 − |s|)` for `s` uniform in
-/// `[−V_MAX/(C + V_MAX), V_MAX/(C + V_MAX)]`, dense near the normal view, sparse at grazing.
-const C: f64 = 1.0;
 /// The slopes' box `[−L, L]²` (standard deviations); the mass outside, `≤ 4 Φ(−L)`, counts as 1.
 const L: f64 = 8.0;
 /// The first boxes' edges along each axis.
 const EDGES: [f64; 7] = [-L, -2.0, -1.0, 0.0, 1.0, 2.0, L];
-/// The largest bound slack a cell keeps (the sum over its boxes of upper minus lower bound).
-pub const CELL_SLACK: f64 = 2.0e-3;
+/// A box is split while its certified gap (upper minus lower bound) exceeds this...
+pub const ETA: f64 = 1.0e-4;
+/// ... but the part of it due to facets whose `f` crosses 0 or 1 within the cell's views only
+/// while splitting shrinks that part (summed over the four children) below this fraction of the
+/// parent's.
+const VIEW_RATIO: f64 = 0.6;
+/// The same for cells wholly past 81° from the normal (`|V| > tan 81°`): their looseness only
+/// lowers `Ē`, and `Ē`'s bound and the measured deficit fall together.
+pub const ETA_GRAZING: f64 = 1.0e-3;
+const TAN_81: f64 = 6.313751514675043;
 /// The most rounds of box splitting a cell takes.
-const MAX_ROUNDS: usize = 24;
-/// The most boxes a cell keeps (its slack stops falling by splitting first at grazing cells).
-const MAX_BOXES: usize = 6000;
-/// Relative margin on every bound computed in `f64` (the rounding of a few dozen operations).
-const REL: f64 = 1.0e-12;
+const MAX_ROUNDS: usize = 30;
+/// The most box evaluations a cell takes (past it no box is split): caps a stiff lobe's bake.
+const CELL_EVALS: usize = 4000;
 
-/// The world half vector `M (X, Y, 1)` of facet frame `q`, unnormalised, for standard normal `X, Y`:
-/// the facet slopes are `(αx/√2) X, (αy/√2) Y` about the tangent angle.
-pub fn matrix(l: &Lobe, q: DQuat) -> DMat3 {
-    let (s, c) = l.tangent_angle.sin_cos();
-    let (sx, sy) = (l.alpha_x * FRAC_1_SQRT_2, l.alpha_y * FRAC_1_SQRT_2);
-    let a = DMat3::from_cols(DVec3::new(c * sx, s * sx, 0.0), DVec3::new(-s * sy, c * sy, 0.0), DVec3::Z);
-    DMat3::from_quat(q) * a
-}
-
-/// Whether a lobe's `E` depends on `|V|` alone: isotropic and untilted (a split lobe's two faces
-/// are then the same).
-pub fn is_radial(l: &Lobe) -> bool {
-    l.alpha_x == l.alpha_y && l.rotation.xyz().length() == 0.0
-}
-
-/// The nodes along one axis, from `−V_MAX` (or 0 for a radial table) to `V_MAX`, exact in `f32`.
-pub fn nodes(radial: bool) -> Vec<f32> {
-    let sm = V_MAX / (C + V_MAX);
-    let n = NODES - 1;
-    let s = |k: usize| if radial { sm * k as f64 / n as f64 } else { -sm + 2.0 * sm * k as f64 / n as f64 };
-    (0..=n).map(|k| (C * s(k) / (1.0 - s(k).abs())) as f32).collect()
-}
-
-/// `Φ(b) − Φ(a)` for `a ≤ b`, from the upper tail where `a > 0` (no cancellation), with its
-/// rounding: `libm::erfc` is within an ulp or two.
-fn mass(a: f64, b: f64) -> f64 {
-    let tail = |x: f64| 0.5 * libm::erfc(x * FRAC_1_SQRT_2);
-    if a > 0.0 {
-        tail(a) - tail(b)
-    } else if b < 0.0 {
-        tail(-b) - tail(-a)
-    } else {
-        1.0 - tail(-a) - tail(b)
-    }
-}
-
-/// One box of standard slopes, with its probability.
-#[derive(Clone, Copy)]
-struct Box2 {
-    x0: f64,
-    x1: f64,
-    y0: f64,
-    y1: f64,
-    p: f64,
-}
-
-impl Box2 {
-    fn new(x0: f64, x1: f64, y0: f64, y1: f64) -> Box2 {
-        Box2 { x0, x1, y0, y1, p: mass(x0, x1) * mass(y0, y1) }
-    }
-
-    fn split(&self) -> [Box2; 4] {
-        let (xm, ym) = (0.5 * (self.x0 + self.x1), 0.5 * (self.y0 + self.y1));
-        [
-            Box2::new(self.x0, xm, self.y0, ym),
-            Box2::new(xm, self.x1, self.y0, ym),
-            Box2::new(self.x0, xm, ym, self.y1),
-            Box2::new(xm, self.x1, ym, self.y1),
-        ]
-    }
-}
-
-/// A box's weights at a cell's four corner views and its slack (weights minus a certified lower
-/// bound of `∫_b g dP`, at the worst corner).
-fn weights(m: &DMat3, b: &Box2, corners: &[[f64; 2]; 4]) -> ([f64; 4], f64) {
-    let ws = [(b.x0, b.y0), (b.x1, b.y0), (b.x1, b.y1), (b.x0, b.y1)].map(|(x, y)| *m * DVec3::new(x, y, 1.0));
-    let tol = 1e-12 * ws.iter().map(|w| w.abs().element_sum()).fold(0.0, f64::max);
-    if ws.iter().all(|w| w.z < -tol) {
-        // Every half vector under the horizon: g = 0.
-        return ([0.0; 4], 0.0);
-    }
-    if !ws.iter().all(|w| w.z > tol) {
-        // The horizon crosses the box: g ≤ 1, the slack all of it.
-        return ([b.p; 4], b.p);
-    }
-    let pq = ws.map(|w| [w.x / w.z, w.y / w.z]);
-    let r2 = pq.map(|[p, q]| p * p + q * q);
-    let rmax2 = r2.iter().fold(0.0f64, |a, &r| a.max(r)) * (1.0 + 1e-10) + 1e-12;
-    let rmin2 = (min_distance2(&pq) * (1.0 - 1e-10) - 1e-12 * (1.0 + rmax2)).max(0.0);
-    let (dmin, dmax) = (1.0 + rmin2, 1.0 + rmax2);
-    let mut s = [0.0; 4];
-    let mut i = [0.0; 4];
-    for (k, v) in corners.iter().enumerate() {
-        let num = pq.map(|[p, q]| 1.0 + p * v[0] + q * v[1]);
-        let nmax = num.iter().fold(f64::NEG_INFINITY, |a, &n| a.max(n));
-        let nmin = num.iter().fold(f64::INFINITY, |a, &n| a.min(n));
-        let mag = 1.0 + pq.iter().map(|[p, q]| p.abs() + q.abs()).fold(0.0, f64::max) * (1.0 + v[0].abs() + v[1].abs());
-        let margin = 8.0 * REL * mag;
-        s[k] = 2.0 * if nmax >= 0.0 { nmax / dmin } else { nmax / dmax } - 1.0 + margin;
-        i[k] = 2.0 * if nmin >= 0.0 { nmin / dmax } else { nmin / dmin } - 1.0 - margin;
-    }
-    let p = b.p;
-    if i.iter().all(|&v| v >= 1.0) {
-        return ([p; 4], 0.0);
-    }
-    if s.iter().all(|&v| v <= 0.0) {
-        return ([0.0; 4], 0.0);
-    }
-    let only_positive = s.map(|v| p * v.max(0.0));
-    let with_line = std::array::from_fn(|k| p * (s[k].max(0.0) + 1.0 - i[k]));
-    let sum = |w: &[f64; 4]| w.iter().sum::<f64>();
-    let mut w = [p; 4];
-    for option in [only_positive, with_line] {
-        if sum(&option) < sum(&w) {
-            w = option;
-        }
-    }
-    let slack = (0..4).map(|k| w[k] - p * i[k].clamp(0.0, 1.0)).fold(0.0, f64::max);
-    (w, slack)
-}
-
-/// The least squared distance from the origin to the convex quadrilateral `pq` (0 inside it).
-fn min_distance2(pq: &[[f64; 2]; 4]) -> f64 {
-    let mut inside_pos = true;
-    let mut inside_neg = true;
-    let mut best = f64::INFINITY;
-    for k in 0..4 {
-        let [px, py] = pq[k];
-        let [qx, qy] = pq[(k + 1) % 4];
-        let (ex, ey) = (qx - px, qy - py);
-        let cross = ex * (-py) - ey * (-px);
-        inside_pos &= cross >= 0.0;
-        inside_neg &= cross <= 0.0;
-        let len2 = ex * ex + ey * ey;
-        let t = if len2 > 0.0 { (-(px * ex + py * ey) / len2).clamp(0.0, 1.0) } else { 0.0 };
-        let (dx, dy) = (px + t * ex, py + t * ey);
-        best = best.min(dx * dx + dy * dy);
-    }
-    if inside_pos || inside_neg {
-        0.0
-    } else {
-        best
-    }
-}
-
-/// The four corner sums of one cell (corner views `corners`), each a bound at its corner of the
-/// convex majorant of `E` on the cell.
-fn cell_sums(m: &DMat3, corners: &[[f64; 2]; 4]) -> [f64; 4] {
-    let mut boxes: Vec<(Box2, [f64; 4], f64)> = Vec::new();
+/// The corner sums of one cell (corner views `corners[..n]`, `n` 2 or 4), each a bound at its
+/// corner of the convex majorant of `E` on the cell, and the box evaluations taken.
+///
+/// Each round evaluates the boxes pending and splits those whose gap is over [`ETA`] in the part
+/// that splitting can shrink, or in the rest while the previous split shrank it enough
+/// ([`VIEW_RATIO`]); the others are kept (their weights summed). Past [`CELL_EVALS`] the boxes
+/// with the largest gaps are split first and the rest kept.
+fn cell_sums(f: &Facets, corners: &[[f64; 2]; 4], n: usize, eta: f64) -> ([f64; 4], usize) {
+    let mut pending: Vec<(Box2, f64)> = Vec::with_capacity(64);
     for x in EDGES.windows(2) {
         for y in EDGES.windows(2) {
-            let b = Box2::new(x[0], x[1], y[0], y[1]);
-            let (w, slack) = weights(m, &b, corners);
-            boxes.push((b, w, slack));
-        }
-    }
-    for _ in 0..MAX_ROUNDS {
-        let total: f64 = boxes.iter().map(|b| b.2).sum();
-        if total <= CELL_SLACK || boxes.len() >= MAX_BOXES {
-            break;
-        }
-        let worst = boxes.iter().map(|b| b.2).fold(0.0, f64::max);
-        let (split, kept): (Vec<_>, Vec<_>) = boxes.into_iter().partition(|b| b.2 >= 0.3 * worst && b.2 > 0.0);
-        boxes = kept;
-        for (b, _, _) in split {
-            for c in b.split() {
-                let (w, slack) = weights(m, &c, corners);
-                boxes.push((c, w, slack));
-            }
+            pending.push((Box2 { x0: x[0], x1: x[1], y0: y[0], y1: y[1] }, f64::INFINITY));
         }
     }
     let mut sums = [0.0; 4];
-    for (_, w, _) in &boxes {
-        for k in 0..4 {
-            sums[k] += w[k];
+    let mut kept = 0usize;
+    let mut evals = 0usize;
+    let mut first = true;
+    let mut cand: Vec<(usize, f64)> = Vec::new();
+    let mut results = Vec::new();
+    for round in 0..MAX_ROUNDS {
+        if pending.is_empty() {
+            break;
         }
+        results.clear();
+        results.extend(pending.iter().map(|(b, _)| weights(f, b, corners, n)));
+        evals += pending.len();
+        // Which boxes want splitting: children come in groups of four (after the first round).
+        cand.clear();
+        let groups = if first { pending.len() } else { pending.len() / 4 };
+        let group = if first { 1 } else { 4 };
+        for g in 0..groups {
+            let view_part: f64 =
+                (0..group).map(|k| (results[g * group + k].gap - results[g * group + k].split_gap).max(0.0)).sum();
+            let helps = first || view_part < VIEW_RATIO * pending[g * group].1;
+            for k in 0..group {
+                let r = &results[g * group + k];
+                let view = (r.gap - r.split_gap).max(0.0);
+                if r.split_gap > eta || (view > eta && helps) {
+                    cand.push((g * group + k, r.gap));
+                }
+            }
+        }
+        first = false;
+        let room = CELL_EVALS.saturating_sub(evals) / 4;
+        if round + 1 == MAX_ROUNDS {
+            cand.clear();
+        } else if cand.len() > room {
+            // The largest gaps first (ties by position: deterministic).
+            cand.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            cand.truncate(room);
+            cand.sort_by_key(|c| c.0);
+        }
+        let mut split = vec![false; pending.len()];
+        for &(k, _) in &cand {
+            split[k] = true;
+        }
+        let mut next = Vec::with_capacity(cand.len() * 4);
+        for (k, (b, _)) in pending.iter().enumerate() {
+            let r = &results[k];
+            if split[k] {
+                let view = (r.gap - r.split_gap).max(0.0);
+                next.extend(b.split().map(|c| (c, view)));
+            } else {
+                for i in 0..n {
+                    sums[i] += r.w[i];
+                }
+                kept += 1;
+            }
+        }
+        pending = next;
     }
-    // The mass past ±L (at most 4 Φ(−L)), and the rounding of the box masses and of the sum.
+    // The mass past ±L (at most 4 Φ(−L)), and the rounding of the box masses (about 10⁻¹⁶ each,
+    // times weights up to 2 |Ṽ|) and of the sum.
     let tail = 2.0 * libm::erfc(L * FRAC_1_SQRT_2);
-    sums.map(|s| s * (1.0 + 1e-12) + tail + 1e-13 * boxes.len() as f64 + 1e-12)
+    let mut out = [0.0; 4];
+    for i in 0..n {
+        let v = corners[i];
+        let per_box = 1e-13 * (1.0 + v[0].abs() + v[1].abs());
+        out[i] = sums[i] * (1.0 + 1e-12) + tail + per_box * kept as f64 + 1e-12;
+    }
+    (out, evals)
 }
 
-/// The node values of facet frame `q` on the grid `xs × ys` (`ys` one node: radial), row-major.
-fn certify(l: &Lobe, q: DQuat, xs: &[f32], ys: &[f32]) -> Vec<f64> {
-    let m = matrix(l, q);
+/// The node values of one frame's facets on the grid `xs × ys` (`ys` one node: radial),
+/// row-major, and the box evaluations taken.
+fn certify(f: &Facets, xs: &[f32], ys: &[f32]) -> (Vec<f64>, usize) {
     let nx = xs.len();
     let radial = ys.len() == 1;
     let cells: Vec<(usize, usize)> = if radial {
@@ -226,28 +137,30 @@ fn certify(l: &Lobe, q: DQuat, xs: &[f32], ys: &[f32]) -> Vec<f64> {
     } else {
         (0..ys.len() - 1).flat_map(|j| (0..nx - 1).map(move |i| (i, j))).collect()
     };
-    let sums: Vec<[f64; 4]> = cells
+    let sums: Vec<([f64; 4], usize)> = cells
         .par_iter()
         .map(|&(i, j)| {
             let (x0, x1) = (f64::from(xs[i]), f64::from(xs[i + 1]));
-            let corners = if radial {
-                [[x0, 0.0], [x1, 0.0], [x1, 0.0], [x0, 0.0]]
+            let near = |a: f64, b: f64| 0.0f64.clamp(a, b);
+            if radial {
+                let eta = if x0 > TAN_81 { ETA_GRAZING } else { ETA };
+                cell_sums(f, &[[x0, 0.0], [x1, 0.0], [0.0; 2], [0.0; 2]], 2, eta)
             } else {
                 let (y0, y1) = (f64::from(ys[j]), f64::from(ys[j + 1]));
-                [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
-            };
-            cell_sums(&m, &corners)
+                let eta = if near(x0, x1).hypot(near(y0, y1)) > TAN_81 { ETA_GRAZING } else { ETA };
+                cell_sums(f, &[[x0, y0], [x1, y0], [x1, y1], [x0, y1]], 4, eta)
+            }
         })
         .collect();
     let mut v = vec![f64::NEG_INFINITY; nx * ys.len()];
-    for (&(i, j), s) in cells.iter().zip(&sums) {
-        let at = |di: usize, dj: usize| if radial { i + di } else { (j + dj) * nx + i + di };
-        for (k, (di, dj)) in [(0, 0), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
-            let n = at(di, dj);
+    let corners: &[(usize, usize)] = if radial { &[(0, 0), (1, 0)] } else { &[(0, 0), (1, 0), (1, 1), (0, 1)] };
+    for (&(i, j), (s, _)) in cells.iter().zip(&sums) {
+        for (k, &(di, dj)) in corners.iter().enumerate() {
+            let n = (j + dj) * nx + i + di;
             v[n] = v[n].max(s[k]);
         }
     }
-    v
+    (v, sums.iter().map(|s| s.1).sum())
 }
 
 /// `(1/π) ∫∫ dx dy / (1 + x² + y²)²` over a rectangle of view slopes: the cosine-weighted solid
@@ -260,30 +173,80 @@ fn rect_weight(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     (f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)) / PI
 }
 
+/// Antiderivatives `G_k(a, b)` with `∂²G_k/∂a∂b = a^i b^j / (1 + a² + b²)²` for
+/// `(i, j) = (0, 0), (1, 0), (0, 1), (1, 1)`.
+fn moments_at(a: f64, b: f64) -> [f64; 4] {
+    let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+    [
+        0.5 * (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()),
+        -(b / sa).atan() / (2.0 * sa),
+        -(a / sb).atan() / (2.0 * sb),
+        -0.25 * (a * a + b * b).ln_1p(),
+    ]
+}
+
+/// An upper bound of `(1/π) ∫ (1 − B) dx dy / (1 + x² + y²)²` over one cell where the bilinear `B`
+/// (node values `v = [v00, v10, v01, v11]`) is at most 1: `B`'s integral in closed form, the sum
+/// of each node's value times the integral of its basis function, with a bound of the rounding
+/// (relative to the magnitudes the closed forms cancel).
+fn cell_deficit_exact(x0: f64, x1: f64, y0: f64, y1: f64, v: [f64; 4]) -> f64 {
+    let corners = [moments_at(x1, y1), moments_at(x0, y1), moments_at(x1, y0), moments_at(x0, y0)];
+    let sign = [1.0, -1.0, -1.0, 1.0];
+    let mut g = [0.0; 4];
+    let mut e = [0.0; 4];
+    for k in 0..4 {
+        for c in 0..4 {
+            g[k] += sign[c] * corners[c][k];
+            e[k] += corners[c][k].abs();
+        }
+        e[k] *= 1e-14;
+    }
+    let (hx, hy) = (x1 - x0, y1 - y0);
+    // ∫ basis · w for the node at (x_a, y_b): ± (x − x_a')(y − y_b') over hx hy, expanded.
+    let basis = |xa: f64, yb: f64, s: f64| {
+        // s (x − xa)(y − yb) = s (xy − yb x − xa y + xa yb)
+        let val = s * (g[3] - yb * g[1] - xa * g[2] + xa * yb * g[0]);
+        let err = e[3] + yb.abs() * e[1] + xa.abs() * e[2] + (xa * yb).abs() * e[0];
+        let mag = g[3].abs() + (yb * g[1]).abs() + (xa * g[2]).abs() + (xa * yb * g[0]).abs();
+        (val / (hx * hy), (err + 1e-15 * mag) / (hx * hy))
+    };
+    let parts = [basis(x1, y1, 1.0), basis(x0, y1, -1.0), basis(x1, y0, -1.0), basis(x0, y0, 1.0)];
+    let mut int_b = 0.0;
+    let mut err = e[0];
+    for k in 0..4 {
+        int_b += v[k] * parts[k].0;
+        err += v[k].abs() * parts[k].1 + 1e-15 * (v[k] * parts[k].0).abs();
+    }
+    ((g[0] - int_b + 2.0 * err) / PI * (1.0 + 1e-12)).max(0.0)
+}
+
 /// `(1/π) ∫ 2π r dr / (1 + r²)²` over `[r0, r1]`.
 fn ring_weight(r0: f64, r1: f64) -> f64 {
     1.0 / (1.0 + r0 * r0) - 1.0 / (1.0 + r1 * r1)
 }
 
 /// A lower bound of `Ē = (1/π) ∫ Ê cos θ dω` for the table's `Ê ≥ min(1, B)`, `B` its
-/// interpolant (1 off the grid): one minus the largest deficit `1 − min(1, B)` of each of
-/// `SUB × SUB` pieces of a cell times its weight (a bilinear function is least at a corner).
+/// interpolant (1 off the grid): one minus a bound of the deficit `1 − min(1, B)` on each cell,
+/// the least of the closed form (where `B ≤ 1` on the cell) and of the largest deficit of each of
+/// `SUB × SUB` pieces times its weight (a bilinear function is least at a corner).
 fn mean_lower(t: &Table) -> f64 {
     const SUB: usize = 8;
+    const SUB_RADIAL: usize = 64;
     let nx = t.xs.len();
     let v = |i: usize, j: usize| f64::from(t.values[j * nx + i]);
     let mut deficit = 0.0;
-    let frac = |k: usize| k as f64 / SUB as f64;
     if t.radial() {
+        let frac = |k: usize| k as f64 / SUB_RADIAL as f64;
         for i in 0..nx - 1 {
             let (x0, x1) = (f64::from(t.xs[i]), f64::from(t.xs[i + 1]));
-            for k in 0..SUB {
+            for k in 0..SUB_RADIAL {
                 let at = |a: f64| 1.0 - ((1.0 - a) * v(i, 0) + a * v(i + 1, 0)).min(1.0);
                 let d = at(frac(k)).max(at(frac(k + 1)));
                 deficit += d * ring_weight(x0 + frac(k) * (x1 - x0), x0 + frac(k + 1) * (x1 - x0));
             }
         }
     } else {
+        let frac = |k: usize| k as f64 / SUB as f64;
         for j in 0..t.ys.len() - 1 {
             let (y0, y1) = (f64::from(t.ys[j]), f64::from(t.ys[j + 1]));
             for i in 0..nx - 1 {
@@ -292,6 +255,7 @@ fn mean_lower(t: &Table) -> f64 {
                     (1.0 - c) * ((1.0 - a) * v(i, j) + a * v(i + 1, j))
                         + c * ((1.0 - a) * v(i, j + 1) + a * v(i + 1, j + 1))
                 };
+                let mut pieces = 0.0;
                 for kx in 0..SUB {
                     for ky in 0..SUB {
                         let d = [(kx, ky), (kx + 1, ky), (kx, ky + 1), (kx + 1, ky + 1)]
@@ -300,25 +264,40 @@ fn mean_lower(t: &Table) -> f64 {
                             .fold(0.0, f64::max);
                         let (ax, bx) = (x0 + frac(kx) * (x1 - x0), x0 + frac(kx + 1) * (x1 - x0));
                         let (ay, by) = (y0 + frac(ky) * (y1 - y0), y0 + frac(ky + 1) * (y1 - y0));
-                        deficit += d * rect_weight(ax, bx, ay, by);
+                        pieces += d * rect_weight(ax, bx, ay, by);
                     }
                 }
+                let vs = [v(i, j), v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)];
+                if vs.iter().all(|&x| x <= 1.0) {
+                    pieces = pieces.min(cell_deficit_exact(x0, x1, y0, y1, vs));
+                }
+                deficit += pieces;
             }
         }
     }
     1.0 - deficit * (1.0 + 1e-9) - 1e-9
 }
 
-/// Lobe `l`'s table: the node values of each facet frame (a split lobe's two, averaged), rounded up
-/// to `f32`, with `Ē` and the term's scale.
+/// Lobe `l`'s table: its frame ([`nodes::frame`]) and nodes ([`nodes::axes`]), the node values of
+/// each facet frame (a split lobe's two, averaged) rounded up to `f32`, with `Ē` and the term's
+/// scale.
 pub fn bake(l: &Lobe) -> Table {
+    bake_counted(l).0
+}
+
+/// [`bake`], with the box evaluations it took.
+pub fn bake_counted(l: &Lobe) -> (Table, usize) {
     let radial = is_radial(l);
-    let xs = nodes(radial);
-    let ys = if radial { vec![0.0] } else { nodes(false) };
-    let (frames, n) = if radial { ([DQuat::IDENTITY; 2], 1) } else { l.facet_frames() };
+    let rotation = nodes::frame(l);
+    let (frames, n) = if radial { ([glam::DQuat::IDENTITY; 2], 1) } else { l.facet_frames() };
+    let fs: Vec<Facets> = frames[..n].iter().map(|&q| nodes::facets(l, q, rotation)).collect();
+    let (xs, ys) = if radial { (nodes::radial_nodes(), vec![0.0]) } else { nodes::axes(&fs, l.alpha_x.max(l.alpha_y)) };
     let mut sum = vec![0.0; xs.len() * ys.len()];
-    for &q in &frames[..n] {
-        for (s, v) in sum.iter_mut().zip(certify(l, q, &xs, &ys)) {
+    let mut evals = 0;
+    for f in &fs {
+        let (v, e) = certify(f, &xs, &ys);
+        evals += e;
+        for (s, v) in sum.iter_mut().zip(v) {
             *s += v;
         }
     }
@@ -334,13 +313,13 @@ pub fn bake(l: &Lobe) -> Table {
             }
         })
         .collect();
-    let mut t = Table { rotation: [1.0, 0.0], xs, ys, values, mean: 1.0, scale: 0.0, deficit: 0.0 };
+    let mut t = Table { rotation, xs, ys, values, mean: 1.0, scale: 0.0, deficit: 0.0 };
     t.mean = mean_lower(&t).clamp(0.0, 1.0);
     let deficit = 1.0 - t.mean;
     // Rounded down, and a few ulps more for the two f32 products of `Table::term`.
     t.scale = if deficit > 1e-6 { down((1.0 / (PI * deficit)) as f32) * (1.0 - 1.0 / 1048576.0) } else { 0.0 };
     t.deficit = measured_deficit(&t);
-    t
+    (t, evals)
 }
 
 /// The next `f32` above `x`, for finite `x ≥ 0`.
