@@ -114,7 +114,7 @@ float lobe_value(GpuLobe l, uint form, bool sym, vec3 wi, vec3 wo) {
 // counts nx and ny, its frame (cos γ, sin γ) and the term's scale as float bits; at the offset its
 // nodes xs (nx), ys (ny) and values (nx · ny, row after row of constant y), as float bits. nx < 2:
 // no table (Ê = 1, the term 0). The f32 arithmetic of `compensation::Table::albedo`, in its order.
-const float BRDF_SHOP_LOOKUP_MARGIN = 1.52587890625e-05;
+const float BRDF_SHOP_LOOKUP_MARGIN = 6.103515625e-05;
 
 float brdf_table_float(uint i) { return uintBitsToFloat(brdf_table_word(i)); }
 

@@ -314,3 +314,36 @@ pub fn reference_turned(material: &Path, env: &Path, deg: &str, mesh: &str, size
 pub fn reference_mesh(material: &Path, mesh: &Path, out: &Path) {
     reference(material, &asset("hdri/studio.exr"), mesh.to_str().unwrap(), "40x40", 1, out);
 }
+
+/// The object pixels whose view is at most `max_deg` from the normal (on the analytic unit sphere
+/// the mesh approximates, default camera): the mean of their channels and the view in the local
+/// frame the shaders build from the normal (`frame_from_normal`).
+pub fn furnace_pixels(im: &brdf_shop::reference::Image, max_deg: f64) -> Vec<(f64, glam::DVec3)> {
+    let cam = brdf_shop::scene::Camera::default();
+    let (w, h) = (im.width, im.height);
+    let mut out = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let p = im.pixels[(y * w + x) as usize];
+            if p[3] != 1.0 {
+                continue;
+            }
+            let d = cam.ray(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            let b = d.dot(cam.eye);
+            let disc = b * b - (cam.eye.length_squared() - 1.0);
+            if disc <= 0.0 {
+                continue;
+            }
+            let n = (cam.eye + (-b - disc.sqrt()) * d).normalize();
+            if -d.dot(n) < max_deg.to_radians().cos() {
+                continue;
+            }
+            let c = glam::DVec3::Y.cross(n);
+            let t = if c.length() < 1e-6 { (glam::DVec3::X - n.x * n).normalize() } else { c.normalize() };
+            let bt = n.cross(t);
+            let wo = glam::DVec3::new(-d.dot(t), -d.dot(bt), -d.dot(n));
+            out.push(((p[0] + p[1] + p[2]) as f64 / 3.0, wo));
+        }
+    }
+    out
+}
