@@ -92,13 +92,13 @@ impl Table {
         ((1.0 - a) * lo + a * hi + LOOKUP_MARGIN).min(1.0)
     }
 
-    /// The term's directional albedo at `ω_o`, `(1 − Ê(ω_o)) · c · π · deficit`: at most
-    /// `1 − Ê(ω_o)`.
+    /// The term's directional albedo at `ω_o`, `(1 − Ê(ω_o)) · c · π · deficit`, the measured
+    /// deficit taken at most `1 − Ē` (which the exact one is): at most `1 − Ê(ω_o)`.
     pub fn term_albedo(&self, wo: DVec3) -> f64 {
         (1.0 - f64::from(self.albedo(wo.as_vec3().to_array())))
             * f64::from(self.scale)
             * std::f64::consts::PI
-            * self.deficit
+            * self.deficit.min(1.0 - self.mean)
     }
 
     /// `f_ms(ω_i, ω_o)` per unit albedo, `(u(ω_i) · u(ω_o)) · c` with `u = 1 − Ê` and `c` the

@@ -254,6 +254,9 @@ pub fn facet_albedo(m: &Material, wo: DVec3, n: usize) -> [f64; 3] {
 
 /// Each lobe's albedo per unit albedo at `ω_o`: the mean of [`facet_term_albedo`] over its facet
 /// terms (`n × n` cells each), with its compensation term's albedo in an energy-preserving material.
+/// There the quadrature's estimate of the lobe's own albedo `E` is taken at most `Ê(ω_o)`, which
+/// the exact `E` is (the certificate, docs/model.md): the rule's error on a sharp lobe would
+/// otherwise add to a term that fills the rest up to 1.
 pub fn facet_lobe_terms(m: &Material, wo: DVec3, n: usize) -> Vec<f64> {
     let tables = m.tables();
     m.lobes
@@ -263,7 +266,10 @@ pub fn facet_lobe_terms(m: &Material, wo: DVec3, n: usize) -> Vec<f64> {
             let (frames, count) = l.facet_frames();
             let shape = l.shape();
             let e = frames[..count].iter().map(|&q| facet_term_albedo(&shape, q, wo, n)).sum::<f64>() / count as f64;
-            e + tables.as_ref().map_or(0.0, |t| t[k].term_albedo(wo))
+            match &tables {
+                Some(t) => e.min(f64::from(t[k].albedo(wo.as_vec3().to_array()))) + t[k].term_albedo(wo),
+                None => e,
+            }
         })
         .collect()
 }
