@@ -115,7 +115,9 @@ fn decoded_size(file: &Path) -> Option<(u32, u32)> {
 /// (status lines on stderr, reports on stdout):
 /// - `paint` prints `wrote FILE (N lobes)` (stderr), `N` the lobes of the material it wrote, at
 ///   least one;
-/// - `check` prints the line `verdict: physically correct` (stdout);
+/// - `check` prints the line `verdict: physically correct` and, the painted material preserving
+///   energy, a `white furnace, lobe k` line per lobe and the material's, each from at least 0.98
+///   (stdout);
 /// - `render` prints the GPU time it took (stderr, `rendered WxH on … ms of GPU time …`) and, for
 ///   the mesh view, which lights the `key` estimator split off the map (`key estimator: …`);
 ///   `render --plan` without `--out` prints the frame's plan (stdout, from `plan of the mesh view: `,
@@ -140,6 +142,12 @@ fn check_promises(line: &str, dir: &Path, stdout: &str, stderr: &str) {
         Some("check") => {
             let want = "verdict: physically correct";
             assert!(stdout.lines().any(|l| l == want), "{line:?}: no line {want:?} on stdout:\n{stdout}");
+            let furnace: Vec<&str> = stdout.lines().filter(|l| l.starts_with("white furnace, ")).collect();
+            assert!(furnace.len() >= 2, "{line:?}: no white-furnace lines on stdout:\n{stdout}");
+            for l in furnace {
+                let from: f64 = l.split("): ").nth(1).and_then(|r| r.split(' ').next()).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+                assert!(from >= 0.98, "{line:?}: {l}");
+            }
         }
         Some("render") if words.contains(&"--plan") && out.is_none() => {
             assert!(stdout.starts_with("plan of the mesh view: "), "{line:?}: no plan on stdout:\n{stdout}");

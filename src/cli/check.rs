@@ -10,8 +10,30 @@ use super::{NotPhysicallyCorrect, UsageError};
 
 const CHANNELS: [&str; 3] = ["red", "green", "blue"];
 
-/// Each lobe's white-furnace range and the material's (`compensation::furnace`).
-type Furnace = (Vec<[f64; 2]>, [f64; 2]);
+/// Each lobe's white-furnace range and the material's (`compensation::furnace`), and each lobe's
+/// table: its nodes along each axis and the seconds its bake took in this run (0 where this
+/// process had baked the same shape already).
+pub struct Furnace {
+    pub lobes: Vec<[f64; 2]>,
+    pub material: [f64; 2],
+    pub tables: Vec<(usize, usize, f64)>,
+}
+
+/// Bakes the tables of an energy-preserving material one lobe at a time (before anything else
+/// evaluates the material), timed: each table's nodes along each axis and seconds.
+fn bake_timed(m: &Material) -> Vec<(usize, usize, f64)> {
+    if !m.preserve_energy {
+        return Vec::new();
+    }
+    m.lobes
+        .iter()
+        .map(|l| {
+            let start = std::time::Instant::now();
+            let t = brdf_shop::brdf::compensation::table(l);
+            (t.xs.len(), t.ys.len(), start.elapsed().as_secs_f64())
+        })
+        .collect()
+}
 
 /// The report as text lines.
 pub fn report_text(m: &Material, r: &Report, furnace: Option<&Furnace>, samples: usize, pairs: usize) -> String {
@@ -69,11 +91,13 @@ pub fn report_text(m: &Material, r: &Report, furnace: Option<&Furnace>, samples:
             "warning: the directional albedo exceeds 1: this material reflects more than it receives at that angle ({why})\n"
         ));
     }
-    if let Some((lobes, material)) = furnace {
-        for (k, [lo, hi]) in lobes.iter().enumerate() {
-            s.push_str(&format!("white furnace, lobe {k} (albedo 1, views ≤ 80°): {lo:.4} to {hi:.4}\n"));
+    if let Some(f) = furnace {
+        for (k, ([lo, hi], (nx, ny, secs))) in f.lobes.iter().zip(&f.tables).enumerate() {
+            s.push_str(&format!(
+                "white furnace, lobe {k} (albedo 1, views ≤ 80°): {lo:.4} to {hi:.4} (table {nx} × {ny} nodes, baked in {secs:.2} s)\n"
+            ));
         }
-        let [lo, hi] = material;
+        let [lo, hi] = f.material;
         s.push_str(&format!(
             "white furnace, material (directional albedo over diffuse + Σ lobe albedos, views ≤ 80°): {lo:.4} to {hi:.4}\n"
         ));
@@ -90,6 +114,7 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
         return Err(UsageError(format!("--pairs: {pairs} is not within 1 and the limit of {MAX_PAIRS}")).into());
     }
     let m = Material::load(material)?;
+    let tables = bake_timed(&m);
     brdf_shop::interrupt::install();
     // A progress bar on stderr (hidden when stderr is not a terminal); Ctrl-C stops the
     // measurement before anything is printed.
@@ -103,7 +128,7 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
     let r = Report::measure_watched(&m, samples, pairs, watch);
     bar.finish_and_clear();
     let r = r.ok_or(brdf_shop::interrupt::Interrupted)?;
-    let furnace = brdf_shop::brdf::compensation::furnace(&m);
+    let furnace = brdf_shop::brdf::compensation::furnace(&m).map(|(lobes, material)| Furnace { lobes, material, tables });
     if json {
         let a = &r.max_albedo;
         let v = serde_json::json!({
@@ -121,7 +146,8 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
             "reciprocity_mean_error": r.reciprocity.mean_rel,
             "pairs": pairs,
             "preserve_energy": m.preserve_energy,
-            "white_furnace": furnace.as_ref().map(|(lobes, material)| serde_json::json!({ "lobes": lobes, "material": material })),
+            "white_furnace": furnace.as_ref().map(|f| serde_json::json!({ "lobes": f.lobes, "material": f.material,
+                "tables": f.tables.iter().map(|t| serde_json::json!({ "nodes": [t.0, t.1], "bake_seconds": t.2 })).collect::<Vec<_>>() })),
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

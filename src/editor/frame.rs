@@ -425,8 +425,9 @@ impl App {
                 self.mesh_waiting = mesh == Recorded::Waiting;
                 let complete = gpu.renderer.tables_complete();
                 self.note_tables(complete);
+                // The views were drawn with the tables the frame had, whatever the decision saw.
                 if !self.mesh_waiting {
-                    self.mesh_key = Some(d.mesh_key.clone());
+                    self.mesh_key = Some(MeshKey { tables: complete, ..d.mesh_key.clone() });
                     if d.mesh.is_some() {
                         self.mesh_previewed = d.mesh_previewed;
                     }
@@ -434,7 +435,7 @@ impl App {
                 if d.canvas.is_some() {
                     self.canvas_previewed = d.canvas_previewed;
                 }
-                self.canvas_key = Some(d.canvas_key.clone());
+                self.canvas_key = Some(CanvasKey { tables: complete, ..d.canvas_key.clone() });
                 if pixels.is_some() {
                     self.captured = pixels;
                 }

@@ -173,6 +173,17 @@ pub fn eval_cases(quick: bool) -> Vec<EvalCase> {
         let p = pairs(&m, n, 8);
         cases.push((format!("reciprocal facet {name}, split"), m, p));
     }
+    // Energy-preserving lobes (docs/model.md, Energy preservation): their compensation terms at the
+    // stiff ends of the tables — α 1e-4 and 1, anisotropy 1:10⁴, facet frames tilted to 89°.
+    for (name, l) in [
+        ("α=1e-4 tilted 89°", Lobe { rotation: DQuat::from_rotation_x(89f64.to_radians()), ..lobe(0.9, 1e-4, 1e-4) }),
+        ("α=1 tilted 60°, split", Lobe { rotation: DQuat::from_rotation_x(60f64.to_radians()), split: true, ..lobe(0.9, 1.0, 1.0) }),
+        ("anisotropy 10⁴:1", Lobe { tangent_angle: 0.3, ..lobe(0.9, 1.0, 1e-4) }),
+    ] {
+        let m = Material { preserve_energy: true, ..mat(Normalization::Reciprocal, vec![l]) };
+        let p = pairs(&m, n, 9);
+        cases.push((format!("energy-preserving {name}"), m, p));
+    }
     cases
 }
 
@@ -194,11 +205,22 @@ pub fn sun_map(width: usize, height: usize, sun: f32) -> Environment {
     Environment::from_texels(width, height, t, &format!("sun {sun} {width}x{height}")).expect("a valid map")
 }
 
-fn scene_case(r: &mut Renderer, name: &str, env: &Environment) -> Result<Case> {
+/// The scene cases' material: a mirror-sharp and an anisotropic lobe, in the paper's Ward form or as
+/// energy-preserving reciprocal lobes (their compensation pass and terms too).
+fn scene_material(preserve_energy: bool) -> Material {
+    let lobes = vec![lobe(0.5, 1e-4, 1e-4), lobe(0.3, 0.3, 0.05)];
+    if preserve_energy {
+        Material { preserve_energy, ..mat(Normalization::Reciprocal, lobes) }
+    } else {
+        mat(Normalization::Ward, lobes)
+    }
+}
+
+fn scene_case(r: &mut Renderer, name: &str, env: &Environment, preserve_energy: bool) -> Result<Case> {
     r.set_environment(env)?;
-    let m = mat(Normalization::Ward, vec![lobe(0.5, 1e-4, 1e-4), lobe(0.3, 0.3, 0.05)]);
+    let m = scene_material(preserve_energy);
     let (mut values, mut non_finite) = (0, 0);
-    for (estimator, spp) in [(Estimator::Fis, 8), (Estimator::Plain, 8), (Estimator::Mis, 64)] {
+    for (estimator, spp) in [(Estimator::Key, 8), (Estimator::Fis, 8), (Estimator::Plain, 8), (Estimator::Mis, 64)] {
         for view in [View::Mesh, View::Canvas] {
             let s = Settings {
                 width: 32,
@@ -228,13 +250,16 @@ pub fn run(r: &mut Renderer, quick: bool) -> Result<Vec<Case>> {
     }
     r.set_mesh(&Mesh::sphere())?;
     let big = if quick { (2048, 1024) } else { (8192, 4096) };
-    out.push(scene_case(r, "sun 3·10⁴ (half float) + negative ring", &sun_map(256, 128, 30_000.0))?);
+    let sun = sun_map(256, 128, 30_000.0);
+    out.push(scene_case(r, "sun 3·10⁴ (half float) + negative ring", &sun, false)?);
+    out.push(scene_case(r, "sun 3·10⁴ + negative ring, energy-preserving lobes", &sun, true)?);
     out.push(scene_case(
         r,
         "1x1 environment",
         &Environment::from_texels(1, 1, vec![[2.0, 1.0, 0.5]], "1x1").expect("valid"),
+        false,
     )?);
-    out.push(scene_case(r, &format!("{}x{} environment", big.0, big.1), &sun_map(big.0, big.1, 30_000.0))?);
+    out.push(scene_case(r, &format!("{}x{} environment", big.0, big.1), &sun_map(big.0, big.1, 30_000.0), false)?);
     Ok(out)
 }
 
