@@ -160,6 +160,7 @@ fn mitsuba_renders_what_reference_renders() {
         ("painted-default", "studio.exr", 0.0),
         ("painted-default", "venice.exr", 0.0),
         ("rotated-split-ward", "city.exr", 0.0),
+        ("energy-preserving", "venice.exr", 0.0),
         ("painted-default", "studio.exr", 90.0),
         ("rotated-split-ward", "city.exr", -37.0),
     ];

@@ -5,7 +5,9 @@
 //! reciprocal model becomes a Beckmann Glossy BSDF about the facet's mean normal, and a per-facet
 //! lookup image, computed here, scales its colour by the ratio of brdf-shop's directional albedo of
 //! that facet term to Cycles' Beckmann + Smith albedo of the closure, so that the reflected energy
-//! matches per view direction (docs/exports.md, Blender (Cycles)). Materials of the paper model go
+//! matches per view direction (docs/exports.md, Blender (Cycles)). An energy-preserving material's
+//! compensation terms join the Diffuse closure, its colour raised by a lookup image of the terms'
+//! directional albedo over the view ([`compensation_image`]). Materials of the paper model go
 //! through the reciprocal model first (`Material::converted`).
 
 use std::fmt::Write as _;
@@ -66,11 +68,44 @@ fn facets(m: &Material) -> Vec<Facet> {
     out
 }
 
-/// The closures `m` needs in Cycles (diffuse, then one per facet frame), counted after the
-/// conversion to the reciprocal model.
+/// Whether `m` (of the reciprocal model) has a compensation term to show: an energy-preserving
+/// material with a lobe of some albedo.
+fn compensates(m: &Material) -> bool {
+    m.preserve_energy && m.lobes.iter().any(|l| l.albedo.iter().any(|&a| a > 0.0))
+}
+
+/// The closures `m` needs in Cycles (diffuse, which carries the compensation terms too, then one per
+/// facet frame), counted after the conversion to the reciprocal model.
 pub fn closure_count(m: &Material) -> usize {
     let m = m.converted(Normalization::Reciprocal);
-    usize::from(m.diffuse.iter().any(|&d| d > 0.0)) + facets(&m).len()
+    usize::from(m.diffuse.iter().any(|&d| d > 0.0) || compensates(&m)) + facets(&m).len()
+}
+
+/// The compensation image of an energy-preserving material (`None` for any other), rows from the
+/// bottom, texels as [`texel_view`] places them but in the local shading frame: per channel
+/// `Σ_k ρ_k · term_albedo_k(ω_o)`, the directional albedo of the lobes' compensation terms at the
+/// texel's view (`compensation::Table::term_albedo`). Added to the Diffuse closure's colour, it makes
+/// the white furnace of the terms exact per view (within the image's bilinear resolution); the
+/// closure spreads that energy over `cos θ_i` where the terms spread it over `(1 − Ê_k(ω_i)) cos θ_i`
+/// (docs/exports.md, Blender (Cycles), Energy-preserving materials).
+pub fn compensation_image(m: &Material) -> Option<Vec<[f64; 3]>> {
+    if !compensates(m) {
+        return None;
+    }
+    let tables = m.tables()?;
+    let n = TABLE_SIZE;
+    let texel = |k: usize| {
+        let v = texel_view(k % n, k / n);
+        let mut c = [0.0; 3];
+        for (l, t) in m.lobes.iter().zip(&tables) {
+            let a = t.term_albedo(v);
+            for (c, r) in c.iter_mut().zip(l.albedo) {
+                *c += r * a;
+            }
+        }
+        c
+    };
+    Some((0..n * n).map(texel).collect())
 }
 
 /// Cycles' Smith Λ for its Beckmann closures: Walter et al. 2007's rational approximation below
@@ -235,6 +270,21 @@ pub fn blender(m: &Material, name: &str) -> Result<String> {
         let _ = writeln!(data, "\n          ]),");
     }
     let _ = writeln!(data, "]");
+    match compensation_image(&r) {
+        None => {
+            let _ = writeln!(data, "COMPENSATION = None");
+        }
+        Some(image) => {
+            let _ = write!(data, "COMPENSATION = [");
+            for (k, c) in image.iter().enumerate() {
+                if k % 6 == 0 {
+                    let _ = write!(data, "\n    ");
+                }
+                let _ = write!(data, "({:.6}, {:.6}, {:.6}), ", c[0], c[1], c[2]);
+            }
+            let _ = writeln!(data, "\n]");
+        }
+    }
     Ok(TEMPLATE.replacen("# @MATERIAL_DATA@\n", &data, 1))
 }
 
@@ -276,6 +326,24 @@ mod tests {
                 assert!((v.length() - 1.0).abs() < 1e-12 && v.z > 0.0, "{v}");
             }
         }
+    }
+
+    /// The compensation image holds the terms' directional albedo at each texel's view (so a
+    /// uniform white light makes the Diffuse closure reflect what the terms reflect there), per
+    /// channel; a material that does not preserve energy has none.
+    #[test]
+    fn compensation_image_is_the_terms_albedo_at_each_texel() {
+        let lobe = Lobe { rotation: DQuat::from_rotation_x(0.3), ..Lobe::isotropic([0.5, 0.4, 0.3], 0.3) };
+        let m = Material { preserve_energy: true, lobes: vec![lobe], ..Material::scratch() };
+        let image = compensation_image(&m).unwrap();
+        let table = crate::brdf::compensation::table(&m.lobes[0]);
+        let n = TABLE_SIZE;
+        for k in [0, 100, n * n / 2 + n / 2, n * n - 1] {
+            let a = table.term_albedo(texel_view(k % n, k / n));
+            assert_eq!(image[k], [0.5 * a, 0.4 * a, 0.3 * a], "texel {k}");
+        }
+        assert!(image.iter().all(|c| c[0] >= 0.0) && image.iter().any(|c| c[0] > 0.01));
+        assert!(compensation_image(&Material { preserve_energy: false, ..m }).is_none());
     }
 
     #[test]

@@ -39,7 +39,11 @@ brdf-shop's shading frame (tangent normalize(Z x n) in Blender's frame), with ro
 not brdf-shop's facet lobe (its masking term and its 1/cos of the view about the facet normal
 differ from brdf-shop's 1/max(cos_i, cos_o) about the surface normal), so a lookup image per facet,
 indexed by the view in the facet frame, scales the closure by brdf-shop's directional albedo over
-Cycles': the reflected energy matches per view, the shape of each lobe is Cycles'.
+Cycles': the reflected energy matches per view, the shape of each lobe is Cycles'. An
+energy-preserving material's compensation terms raise the diffuse closure's colour by their
+directional albedo at the view (a lookup image indexed by the view in the local frame): their
+energy matches per view, spread over the light as cos θ_i where the terms weight it by
+(1 - Ê(ω_i)) cos θ_i.
 """
 
 import math
@@ -55,7 +59,9 @@ import bpy
 # The material, filled in by `brdf-shop export`: the diffuse albedo and, per facet frame, its
 # albedo share, rotation (w, x, y, z) in the local shading frame, roughness, tangent angle and
 # lookup image (TABLE_SIZE² values, rows from the bottom; texel (u, v) holds the view
-# v_f = (x, y, z) in the facet frame with (u, v) = 1/2 + 1/2 (x, y) / (1 + z)); and brdf-shop's
+# v_f = (x, y, z) in the facet frame with (u, v) = 1/2 + 1/2 (x, y) / (1 + z)); for an
+# energy-preserving material COMPENSATION, the lobes' compensation terms' directional albedo
+# (r, g, b) per texel of the view in the local frame, laid out the same way (else None); and brdf-shop's
 # limits on environment maps (ENV_MAX_SIDE texels a side, ENV_MAX_TEXELS in all, ENV_MAX_BYTES of
 # file), the ones its own loader applies.
 
@@ -74,7 +80,8 @@ class Facet:
 
 # Test hook (tests/export_blender.rs, negative checks): "tangent-90" turns every tangent by 90°,
 # "inverse-frame" puts Q^-1 in place of each facet frame Q, "env-rotation-negated" turns the
-# environment by -DEG for --env-rotation DEG. Unset in normal use.
+# environment by -DEG for --env-rotation DEG, "no-compensation" leaves the compensation terms out.
+# Unset in normal use.
 FAULT = os.environ.get("BRDF_SHOP_BLENDER_FAULT", "")
 
 
@@ -178,6 +185,8 @@ def own_datablock(collection, name):
 
 
 def lookup_image(name, table):
+    """A TABLE_SIZE² float image of `table` (rows from the bottom): one value a texel (grey), or an
+    (r, g, b) tuple."""
     size = TABLE_SIZE
     old = own_datablock(bpy.data.images, name)
     if old is not None:  # a lookup image of an earlier run: its node group is rebuilt
@@ -186,7 +195,7 @@ def lookup_image(name, table):
     img.colorspace_settings.name = "Non-Color"
     pixels = [1.0] * (4 * size * size)
     for k, v in enumerate(table):
-        pixels[4 * k : 4 * k + 3] = (v, v, v)
+        pixels[4 * k : 4 * k + 3] = v if isinstance(v, tuple) else (v, v, v)
     img.pixels.foreach_set(pixels)
     # Packed as 32-bit OpenEXR, so a saved and reopened .blend renders the same image.
     img.file_format = "OPEN_EXR"
@@ -229,11 +238,32 @@ def build_group(name):
         g.link(g.vmath("DOT_PRODUCT", view, axis), local.inputs[i])
     local = local.outputs[0]
 
+    def lookup(image, v, column):
+        """The colour of `image` at the view v = (x, y, z), at (u, v) = 1/2 + 1/2 (x, y) / (1 + z)."""
+        vx, vy, vz = v
+        s = g.math("DIVIDE", 0.5, g.math("ADD", vz, 1.0, column), column)
+        uv = g.node("ShaderNodeCombineXYZ", column + 1)
+        g.link(g.math("MULTIPLY_ADD", vx, s, column + 1, 0.5), uv.inputs[0])
+        g.link(g.math("MULTIPLY_ADD", vy, s, column + 1, 0.5), uv.inputs[1])
+        tex = g.node("ShaderNodeTexImage", column + 2, interpolation="Linear", extension="EXTEND")
+        tex.image = image
+        g.link(uv.outputs[0], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+
     shaders = []
-    if any(d > 0.0 for d in DIFFUSE):
+    if any(d > 0.0 for d in DIFFUSE) or COMPENSATION is not None:
         d = g.node("ShaderNodeBsdfDiffuse", 6)
         d.inputs["Color"].default_value = (DIFFUSE[0], DIFFUSE[1], DIFFUSE[2], 1.0)
         d.inputs["Roughness"].default_value = 0.0
+        if COMPENSATION is not None and FAULT != "no-compensation":
+            # The lobes' compensation terms: their directional albedo at the view in the local frame
+            # raises the diffuse colour (docs/exports.md, Blender (Cycles), Energy-preserving
+            # materials).
+            split = g.node("ShaderNodeSeparateXYZ", 2)
+            g.link(local, split.inputs[0])
+            image = lookup_image("brdf-shop %s compensation" % name, COMPENSATION)
+            terms = lookup(image, tuple(split.outputs), 3)
+            g.link(g.vmath("ADD", terms, tuple(DIFFUSE), 5), d.inputs["Color"])
         shaders.append(d.outputs[0])
     for k, f in enumerate(FACETS):
         q = conj(f.rotation) if FAULT == "inverse-frame" else f.rotation
@@ -241,15 +271,9 @@ def build_group(name):
         normal = world(rotate(q, (0.0, 0.0, 1.0)))
         tangent = world(rotate(q, (math.cos(phi), math.sin(phi), 0.0)))
         # The view in the facet frame and its lookup coordinates.
-        vx, vy, vz = (g.vmath("DOT_PRODUCT", local, rotate(q, axis), 3) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
-        s = g.math("DIVIDE", 0.5, g.math("ADD", vz, 1.0, 3), 3)
-        uv = g.node("ShaderNodeCombineXYZ", 4)
-        g.link(g.math("MULTIPLY_ADD", vx, s, 4, 0.5), uv.inputs[0])
-        g.link(g.math("MULTIPLY_ADD", vy, s, 4, 0.5), uv.inputs[1])
-        tex = g.node("ShaderNodeTexImage", 5, interpolation="Linear", extension="EXTEND")
-        tex.image = lookup_image("brdf-shop %s facet %d" % (name, k), f.table)
-        g.link(uv.outputs[0], tex.inputs["Vector"])
-        colour = g.vmath("MULTIPLY", tex.outputs["Color"], tuple(f.colour), 5)
+        v = tuple(g.vmath("DOT_PRODUCT", local, rotate(q, axis), 3) for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
+        ratio = lookup(lookup_image("brdf-shop %s facet %d" % (name, k), f.table), v, 3)
+        colour = g.vmath("MULTIPLY", ratio, tuple(f.colour), 5)
         roughness, anisotropy = cycles_roughness(f.alpha_x, f.alpha_y)
         gl = g.node("ShaderNodeBsdfGlossy", 6, distribution="BECKMANN")
         g.link(colour, gl.inputs["Color"])

@@ -1,10 +1,12 @@
 //! The GLSL exports: the renderer's model source (`glsl/include/math.glsl` and `brdf.glsl`, embedded
 //! at build time, so an export cannot drift from what the renderer runs) followed by the material's
-//! definitions of brdf.glsl's five accessors — constants for `glsl`, BRDF Explorer parameters
-//! (uniforms it sets from its sliders) for `brdf-explorer`.
+//! definitions of brdf.glsl's seven accessors — constants for `glsl`, BRDF Explorer parameters
+//! (uniforms it sets from its sliders) for `brdf-explorer`; the compensation tables of an
+//! energy-preserving material are constants in both (`compensation::words`, baked here).
 
 use std::fmt::Write;
 
+use crate::brdf::compensation::{self, Table};
 use crate::brdf::{Material, Normalization};
 use crate::error::{Error, Result};
 
@@ -69,7 +71,8 @@ fn describe(m: &Material) -> String {
             if m.is_symmetrized() { ", symmetrised" } else { "" }
         ),
     };
-    format!("{} lobe(s), {model}", m.lobes.len())
+    let energy = if m.preserve_energy { ", energy-preserving" } else { "" };
+    format!("{} lobe(s), {model}{energy}", m.lobes.len())
 }
 
 /// Entry points both GLSL formats add after the model: world-space vectors in any tangent frame.
@@ -91,6 +94,42 @@ fn comment(s: &mut String, text: &str) {
         s.push_str(line);
         s.push('\n');
     }
+}
+
+/// The compensation tables of an energy-preserving material as brdf.glsl reads them
+/// (`compensation::words`, one table per lobe, baked or taken from the cache); `None` for any other.
+fn table_words(m: &Material) -> Option<Vec<u32>> {
+    let tables = m.tables()?;
+    let refs: Vec<Option<&Table>> = tables.iter().map(|t| Some(&**t)).collect();
+    Some(compensation::words(&refs))
+}
+
+/// brdf.glsl's two table accessors: `brdf_table_word` over the array `BRDF_SHOP_TABLES` of
+/// `words`, or 0 without tables; `brdf_preserve_energy` returns `enabled`. The array is a global
+/// variable with a constant initialiser, not a `const`: an optimiser that inlines every call
+/// (`glslc -O`) gives each dynamic index into a `const` array a local copy of the whole array (45
+/// in `material_eval`, which lavapipe did not finish compiling in 5 minutes), while a global is one
+/// copy, written once, that drivers keep as constant data.
+fn table_accessors(s: &mut String, words: Option<&[u32]>, enabled: &str) {
+    let _ = writeln!(s, "bool brdf_preserve_energy() {{ return {enabled}; }}");
+    let Some(words) = words else {
+        s.push_str("uint brdf_table_word(uint i) { return 0u; }\n");
+        return;
+    };
+    let n = words.len();
+    comment(
+        s,
+        "The compensation tables (compensation::words; docs/formats.md, Compensation tables): a global
+initialised once, read only through brdf_table_word.",
+    );
+    let _ = writeln!(s, "uint BRDF_SHOP_TABLES[{n}] = uint[{n}](");
+    for (k, chunk) in words.chunks(8).enumerate() {
+        let line: Vec<String> = chunk.iter().map(|w| format!("0x{w:08x}u")).collect();
+        let last = (k + 1) * 8 >= n;
+        let _ = writeln!(s, "    {}{}", line.join(", "), if last { "" } else { "," });
+    }
+    s.push_str(");\n");
+    s.push_str("uint brdf_table_word(uint i) { return BRDF_SHOP_TABLES[i]; }\n");
 }
 
 /// `--format glsl`: the model and the material as constants. Include it in a GLSL 4.10+ (or Vulkan)
@@ -161,6 +200,8 @@ brdf_ / BRDF_SHOP_; include it once.
     );
     let _ = writeln!(s, "uint brdf_form() {{ return {}u; }}", form(m));
     let _ = writeln!(s, "bool brdf_symmetrize() {{ return {}; }}", m.is_symmetrized());
+    let words = table_words(m);
+    table_accessors(&mut s, words.as_deref(), if words.is_some() { "true" } else { "false" });
     s
 }
 
@@ -193,14 +234,24 @@ pub fn brdf_explorer(m: &Material) -> Result<String> {
         "# f(L, V) exactly as `brdf-shop eval` computes it (in single precision), in the frame X, Y, N the
 # viewer passes. Parameters: diffuse colour; per lobe k its albedo colour, roughness alpha_x/alpha_y
 # (1e-4..1), tangent angle (radians, -pi..pi), rotation quaternion (w x y z, normalised in the shader) and split.
-
-::begin parameters
 ",
     );
+    let words = table_words(m);
+    if words.is_some() {
+        s.push_str(
+            "# preserve_energy: each lobe's energy compensation term, read from tables baked for the lobe shapes as
+# exported (a lobe's roughness, tangent angle or rotation changed here keeps its exported table).
+",
+        );
+    }
+    s.push_str("\n::begin parameters\n");
     let d = m.diffuse;
     let _ = writeln!(s, "color diffuse {} {} {}", lit(d[0]), lit(d[1]), lit(d[2]));
     if m.normalization != Normalization::Reciprocal {
         let _ = writeln!(s, "bool symmetrize {}", u8::from(m.is_symmetrized()));
+    }
+    if words.is_some() {
+        s.push_str("bool preserve_energy 1\n");
     }
     let pi = std::f64::consts::PI;
     for (k, l) in m.lobes.iter().enumerate() {
@@ -252,6 +303,7 @@ GpuLobe brdf_shop_lobe(vec3 albedo, float ax, float ay, float phi, vec4 wxyz, bo
     } else {
         s.push_str("bool brdf_symmetrize() { return symmetrize; }\n");
     }
+    table_accessors(&mut s, words.as_deref(), if words.is_some() { "preserve_energy" } else { "false" });
     s.push_str(
         "
 vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {

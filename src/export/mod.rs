@@ -67,12 +67,6 @@ impl Format {
 /// The exported text of `material` in `format`; a material the format cannot express is refused.
 /// `name` names what the format names (the Blender material and node group).
 pub fn text(material: &Material, format: Format, name: &str) -> Result<String> {
-    if material.preserve_energy {
-        return Err(crate::Error::input(
-            "material",
-            format!("preserve_energy: the {} export writes no energy compensation", format.name()),
-        ));
-    }
     match format {
         Format::Mitsuba => Ok(mitsuba(material)),
         Format::BrdfExplorer => brdf_explorer(material),

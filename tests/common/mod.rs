@@ -193,6 +193,28 @@ pub fn feature_materials() -> Vec<(&'static str, Material)> {
     ]
 }
 
+/// An energy-preserving material (docs/model.md, Energy preservation): a split lobe tilted both
+/// ways, a tilted anisotropic lobe (tables in a turned frame) and an isotropic untilted one (a
+/// radial table), coloured albedos.
+pub fn energy_preserving() -> Material {
+    Material {
+        preserve_energy: true,
+        diffuse: [0.1, 0.12, 0.15],
+        normalization: Normalization::Reciprocal,
+        symmetrize: false,
+        lobes: vec![
+            Lobe {
+                rotation: DQuat::from_rotation_x(0.3),
+                split: true,
+                albedo: [0.3, 0.25, 0.2],
+                ..lobe(0.3, 0.15, 0.15)
+            },
+            Lobe { rotation: DQuat::from_rotation_y(-0.35), tangent_angle: 0.5, ..lobe(0.3, 0.1, 0.35) },
+            Lobe { albedo: [0.2, 0.3, 0.35], ..lobe(0.2, 0.4, 0.4) },
+        ],
+    }
+}
+
 /// Runs the binary under test; returns (exit status, stdout, stderr).
 pub fn run(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-shop")).args(args).output().expect("run brdf-shop");
@@ -204,7 +226,8 @@ pub fn run(args: &[&str]) -> (i32, String, String) {
 }
 
 /// Every material feature (both paper normalisations, rotations, split lobes, anisotropy,
-/// `symmetrize`, the reciprocal facet lobes), the default painted material, and a diffuse-only one.
+/// `symmetrize`, the reciprocal facet lobes, energy preservation), the default painted material, and
+/// a diffuse-only one.
 pub fn export_materials(dir: &Path) -> Vec<(String, PathBuf)> {
     let mut out = Vec::new();
     let mut all: Vec<(String, Material)> = feature_materials().into_iter().map(|(n, m)| (n.to_string(), m)).collect();
@@ -223,6 +246,7 @@ pub fn export_materials(dir: &Path) -> Vec<(String, PathBuf)> {
             }],
         },
     ));
+    all.push(("energy-preserving".into(), energy_preserving()));
     all.push(("diffuse-only".into(), Material { lobes: vec![], ..Material::scratch() }));
     for (name, m) in all {
         let p = dir.join(format!("{name}.brdf.json"));
