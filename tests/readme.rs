@@ -145,7 +145,8 @@ fn check_promises(line: &str, dir: &Path, stdout: &str, stderr: &str) {
             let furnace: Vec<&str> = stdout.lines().filter(|l| l.starts_with("white furnace, ")).collect();
             assert!(furnace.len() >= 2, "{line:?}: no white-furnace lines on stdout:\n{stdout}");
             for l in furnace {
-                let from: f64 = l.split("): ").nth(1).and_then(|r| r.split(' ').next()).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+                let from: f64 =
+                    l.split("): ").nth(1).and_then(|r| r.split(' ').next()).and_then(|v| v.parse().ok()).unwrap_or(0.0);
                 assert!(from >= 0.98, "{line:?}: {l}");
             }
         }

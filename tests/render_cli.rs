@@ -60,10 +60,13 @@ fn render_writes_exr_png_and_timings() {
     assert_eq!((env.width, env.height), (48, 32));
     let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&timings).unwrap()).unwrap();
     let names: Vec<&str> = t["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
-    // The default material has a diffuse term and lobes: the G-buffer's pass (which starts the image
-    // with the background and the diffuse term), then the lobes.
+    // The default material has a diffuse term and energy-preserving lobes: the G-buffer's pass
+    // (which starts the image with the background and the diffuse term), the lobes, then their
+    // compensation terms.
     assert_eq!(names[0], "gbuffer", "{names:?}");
-    assert!(names[1..].iter().all(|n| n.starts_with("lobe")) && names.len() > 1, "{names:?}");
+    assert_eq!(names.last(), Some(&"compensation"), "{names:?}");
+    let lobes = &names[1..names.len() - 1];
+    assert!(lobes.iter().all(|n| n.starts_with("lobe")) && !lobes.is_empty(), "{names:?}");
     assert!(t["passes"].as_array().unwrap().iter().all(|p| p["ms"].as_f64().unwrap() >= 0.0));
     // The whole frame holds every pass (their timestamps lie between its two, on one clock: 1 ns
     // slack for the drivers' rounding of each tick), and its untimed part is the difference.

@@ -128,7 +128,8 @@ pub fn run(material: &Path, samples: usize, pairs: usize, json: bool) -> anyhow:
     let r = Report::measure_watched(&m, samples, pairs, watch);
     bar.finish_and_clear();
     let r = r.ok_or(brdf_shop::interrupt::Interrupted)?;
-    let furnace = brdf_shop::brdf::compensation::furnace(&m).map(|(lobes, material)| Furnace { lobes, material, tables });
+    let furnace =
+        brdf_shop::brdf::compensation::furnace(&m).map(|(lobes, material)| Furnace { lobes, material, tables });
     if json {
         let a = &r.max_albedo;
         let v = serde_json::json!({

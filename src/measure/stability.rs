@@ -177,7 +177,10 @@ pub fn eval_cases(quick: bool) -> Vec<EvalCase> {
     // stiff ends of the tables — α 1e-4 and 1, anisotropy 1:10⁴, facet frames tilted to 89°.
     for (name, l) in [
         ("α=1e-4 tilted 89°", Lobe { rotation: DQuat::from_rotation_x(89f64.to_radians()), ..lobe(0.9, 1e-4, 1e-4) }),
-        ("α=1 tilted 60°, split", Lobe { rotation: DQuat::from_rotation_x(60f64.to_radians()), split: true, ..lobe(0.9, 1.0, 1.0) }),
+        (
+            "α=1 tilted 60°, split",
+            Lobe { rotation: DQuat::from_rotation_x(60f64.to_radians()), split: true, ..lobe(0.9, 1.0, 1.0) },
+        ),
         ("anisotropy 10⁴:1", Lobe { tangent_angle: 0.3, ..lobe(0.9, 1.0, 1e-4) }),
     ] {
         let m = Material { preserve_energy: true, ..mat(Normalization::Reciprocal, vec![l]) };

@@ -140,20 +140,29 @@ impl CompensationPass {
         Ok(CompensationPass { pipeline })
     }
 
-    /// Adds each lobe's compensation term; `key`: the map's residual coefficients and its key lights
-    /// as distant sources (the `key` estimator), as the diffuse term takes them.
-    pub fn record(&self, rec: &Recording<'_>, buffers: [&Buffer; 3], key: bool) -> Result<()> {
+    /// Adds each lobe's compensation term; `lights`: the map's lights as distant sources over the
+    /// residual map's coefficients, on every estimator — the key and wide lights with the map
+    /// without both where the cone table holds them all, else the key lights with the map without
+    /// them. A bright small light's bands above 2 are much of the map's, and a tilted lobe's kernel
+    /// has strong bands above 2 too: through the SH9 of the whole map the term misses a studio lamp
+    /// by a third (the quick sweep's `painted-tilted` under `plain`).
+    pub fn record(&self, rec: &Recording<'_>, buffers: [&Buffer; 3], lights: bool) -> Result<()> {
         let t = rec.targets;
         let [material, tables, kernels] = buffers;
         let mut push: Push = rec.push;
-        let [sh, lights] = diffuse::term(rec.env()?, [0.0; 3], key, &mut push);
+        let env = rec.env()?;
+        let [mut sh, mut table] = diffuse::term(env, [0.0; 3], lights, &mut push);
+        let wide = env.keys.as_ref().and_then(|k| k.wide.as_ref()).filter(|_| lights);
+        if let Some((w, cones)) = wide.and_then(|w| w.cones.as_ref().map(|c| (w, c))) {
+            (sh, table) = (&w.sh, cones);
+        }
         let set = rec.set(
             &self.pipeline,
             &[
                 Binding::StorageImageRead(&t.normal),
                 Binding::StorageImage(&t.accum),
                 Binding::StorageRead(sh),
-                Binding::StorageRead(lights),
+                Binding::StorageRead(table),
                 Binding::StorageRead(material),
                 Binding::StorageRead(tables),
                 Binding::StorageRead(kernels),

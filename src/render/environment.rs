@@ -112,9 +112,12 @@ pub struct GpuWideLights {
     /// How many points `points` holds (four per light).
     pub count: u32,
     /// [`cone_table`] of the key and wide lights (`WideLightSet::all`), for the reach test of a
-    /// lobe that sees them all as tiles; `None` where they are more than the test's slots
-    /// (`WideLightSet::reach_testable`): such a lobe takes no reach test.
+    /// lobe that sees them all as tiles, and with [`GpuWideLights::sh`] for the energy compensation
+    /// pass; `None` where they are more than the test's slots (`WideLightSet::reach_testable`): such
+    /// a lobe takes no reach test.
     pub cones: Option<Buffer>,
+    /// `Â_l · L_lm` of `residual`, 9 × `vec4`, as [`GpuKeyLights::sh`].
+    pub sh: Buffer,
 }
 
 impl GpuWideLights {
@@ -128,12 +131,21 @@ impl GpuWideLights {
                 return Err(e);
             }
         };
+        let sh = match sh_buffer(ctx, &wide.residual, "keylights.wide.sh") {
+            Ok(sh) => sh,
+            Err(e) => {
+                residual.destroy(ctx);
+                points.destroy(ctx);
+                return Err(e);
+            }
+        };
         let cones = if all.len() <= crate::scene::keylight::MAX_LIGHTS {
             match storage(ctx, &cone_table(&all), "keylights.wide.cones") {
                 Ok(c) => Some(c),
                 Err(e) => {
                     residual.destroy(ctx);
                     points.destroy(ctx);
+                    sh.destroy(ctx);
                     return Err(e);
                 }
             }
@@ -141,12 +153,13 @@ impl GpuWideLights {
             None
         };
         let count = 4 * all.len() as u32;
-        Ok(GpuWideLights { residual, points, count, cones })
+        Ok(GpuWideLights { residual, points, count, cones, sh })
     }
 
     fn destroy(self, ctx: &Context) {
         self.residual.destroy(ctx);
         self.points.destroy(ctx);
+        self.sh.destroy(ctx);
         if let Some(c) = self.cones {
             c.destroy(ctx);
         }

@@ -137,8 +137,9 @@ pub enum Pass {
     /// deferred diffuse term where the compact pass left it.
     Denoise { min_alpha: f64, sparse: bool, diffuse: Option<([f64; 3], bool)> },
     /// The lobes' energy compensation terms (an energy-preserving material), over the listed pixels;
-    /// `key`: the residual map's coefficients plus the key lights, as the diffuse term takes them.
-    Compensation { key: bool },
+    /// `lights`: the map has key lights, which the pass takes as distant sources over the residual
+    /// map's coefficients, whatever the estimator.
+    Compensation { lights: bool },
     /// The whole material by multiple importance sampling, samples `offset..offset + samples`.
     Mis { offset: u32, samples: u32 },
     /// Add the frame into the refinement's running sum (`first`: start it).
@@ -357,7 +358,7 @@ fn shade(r: &Request, lobes: Vec<LobeStep>, p: &mut Plan) {
     }
     if compensated(r) {
         let why = "the material preserves energy: each lobe's compensation term (SH9 of the map)";
-        p.run(Pass::Compensation { key: r.estimator == Estimator::Key }, why);
+        p.run(Pass::Compensation { lights: r.lights.is_some() }, why);
     } else if r.material.normalization == crate::brdf::Normalization::Reciprocal {
         let why =
             if r.material.preserve_energy { "no lobe has albedo" } else { "the material does not preserve energy" };

@@ -104,8 +104,8 @@ impl Step {
                 if *key { "SH9 of the residual plus the key lights" } else { "SH9 irradiance" }.into()
             }
             Pass::Lobe(l) => lobe_words(l),
-            Pass::Compensation { key } => {
-                if *key { "SH9 of the residual plus the key lights" } else { "SH9 of the map" }.into()
+            Pass::Compensation { lights } => {
+                if *lights { "SH9 of the residual plus the key lights" } else { "SH9 of the map" }.into()
             }
             Pass::Denoise { min_alpha, diffuse, .. } => {
                 let d = if diffuse.is_some() { ", adds the diffuse term" } else { "" };

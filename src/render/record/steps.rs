@@ -100,9 +100,9 @@ impl StepRecorder<'_> {
             Pass::Denoise { min_alpha, sparse, diffuse } => {
                 p.denoise.record(rec, *min_alpha, self.spp, *sparse, *diffuse)
             }
-            Pass::Compensation { key } => {
+            Pass::Compensation { lights } => {
                 let [tables, kernels] = self.compensation;
-                p.compensation.record(rec, [self.material, tables, kernels], *key)
+                p.compensation.record(rec, [self.material, tables, kernels], *lights)
             }
             Pass::Mis { offset, samples } => {
                 let seq = self.sequence.ok_or_else(|| missing("the mis sequence"))?;
