@@ -261,6 +261,7 @@ fn horizon_view_material() -> Material {
     Material {
         diffuse: [0.2, 0.3, 0.4],
         normalization: brdf_shop::brdf::Normalization::Ward,
+        preserve_energy: false,
         lobes: vec![lobe],
         ..Material::scratch()
     }

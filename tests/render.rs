@@ -272,6 +272,7 @@ fn stress_cases_stay_finite() {
             Material {
                 lobes: vec![common::lobe(0.5, 1.0, 1.0)],
                 normalization: Normalization::Ward,
+                preserve_energy: false,
                 ..Material::scratch()
             },
         ),

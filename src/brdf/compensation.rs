@@ -234,7 +234,7 @@ fn furnace_views() -> Vec<DVec3> {
 /// `check` (`energy::FACET_GRID`² cells per facet term). `None` for any other material.
 pub fn furnace(m: &super::Material) -> Option<(Vec<[f64; 2]>, [f64; 2])> {
     use rayon::prelude::*;
-    if !m.preserve_energy {
+    if !m.compensated() {
         return None;
     }
     let views = furnace_views();

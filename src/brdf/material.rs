@@ -296,10 +296,16 @@ impl Material {
         f
     }
 
+    /// Whether the lobes carry their compensation terms: `preserve_energy` on the reciprocal model
+    /// (a file refuses it on the paper's; a material built in code that sets it there has none).
+    pub fn compensated(&self) -> bool {
+        self.preserve_energy && self.normalization == Normalization::Reciprocal
+    }
+
     /// The compensation tables of the lobes, in order, for an energy-preserving material
     /// (`brdf::compensation`); `None` for any other.
     pub fn tables(&self) -> Option<Vec<Arc<Table>>> {
-        self.preserve_energy.then(|| self.lobes.iter().map(compensation::table).collect())
+        self.compensated().then(|| self.lobes.iter().map(compensation::table).collect())
     }
 
     /// `f(ω_i, ω_o)` per RGB channel, in the local frame. Inputs are normalised first; a zero-length

@@ -269,7 +269,7 @@ impl App {
         let generation = state.history.generation();
         let light = state.settings.canvas.light;
         let m = state.material();
-        let tables = !m.preserve_energy || m.lobes.iter().all(crate::brdf::compensation::baked);
+        let tables = !m.compensated() || m.lobes.iter().all(crate::brdf::compensation::baked);
         let mesh = MeshKey {
             material: generation,
             scene: self.scene_generation,

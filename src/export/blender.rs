@@ -71,7 +71,7 @@ fn facets(m: &Material) -> Vec<Facet> {
 /// Whether `m` (of the reciprocal model) has a compensation term to show: an energy-preserving
 /// material with a lobe of some albedo.
 fn compensates(m: &Material) -> bool {
-    m.preserve_energy && m.lobes.iter().any(|l| l.albedo.iter().any(|&a| a > 0.0))
+    m.compensated() && m.lobes.iter().any(|l| l.albedo.iter().any(|&a| a > 0.0))
 }
 
 /// The closures `m` needs in Cycles (diffuse, which carries the compensation terms too, then one per

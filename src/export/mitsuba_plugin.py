@@ -117,8 +117,8 @@ def word_float(w):
     return struct.unpack("<f", struct.pack("<I", w))[0]
 
 
-# What each lookup adds for its own f32 rounding (`compensation::LOOKUP_MARGIN`, 2^-16).
-LOOKUP_MARGIN = 2.0 ** -16
+# What each lookup adds for its own f32 rounding (`compensation::LOOKUP_MARGIN`, 2^-14).
+LOOKUP_MARGIN = 2.0 ** -14
 
 
 class Table:

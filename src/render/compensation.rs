@@ -90,7 +90,7 @@ impl Tables {
     /// tables not baked yet are baked on a thread of their own, which calls it when done (the
     /// editor); `None` bakes them now.
     pub fn update(&mut self, m: &Material, background: Option<&super::lobe::Notify>) -> (&[u8], &[u8]) {
-        let tables: Vec<Option<Arc<Table>>> = if m.preserve_energy {
+        let tables: Vec<Option<Arc<Table>>> = if m.compensated() {
             m.lobes
                 .iter()
                 .map(|l| match background {
@@ -242,12 +242,16 @@ mod tests {
         }
     }
 
-    /// The shaders' copy of the lookup margin is the model's.
+    /// The shaders' and the Mitsuba plug-in's copies of the lookup margin are the model's.
     #[test]
     fn the_shaders_margin_is_the_models() {
         let src = include_str!("../../glsl/include/brdf.glsl");
         let line = src.lines().find(|l| l.contains("const float BRDF_SHOP_LOOKUP_MARGIN")).expect("declared");
         let value: f32 = line.split('=').nth(1).unwrap().trim().trim_end_matches(';').parse().unwrap();
         assert_eq!(value, compensation::LOOKUP_MARGIN);
+        let plugin = include_str!("../export/mitsuba_plugin.py");
+        let line = plugin.lines().find(|l| l.starts_with("LOOKUP_MARGIN = 2.0 ** -")).expect("declared");
+        let exponent: i32 = line.rsplit('-').next().unwrap().trim().parse().unwrap();
+        assert_eq!(2f32.powi(-exponent), compensation::LOOKUP_MARGIN);
     }
 }

@@ -99,7 +99,7 @@ pub fn material_bytes(m: &Material) -> Vec<u8> {
                 Normalization::Reciprocal => 2,
             },
             u32::from(m.is_symmetrized()),
-            u32::from(m.preserve_energy),
+            u32::from(m.compensated()),
         ],
     };
     let mut lobes: Vec<GpuLobe> = m

@@ -247,7 +247,7 @@ fn diffuse_term(r: &Request) -> Option<([f64; 3], bool)> {
 /// Whether a frame of `r` draws the lobes' energy compensation terms (`mis` evaluates them with the
 /// whole material).
 fn compensated(r: &Request) -> bool {
-    r.estimator != Estimator::Mis && r.material.preserve_energy && r.material.lobes.iter().any(|l| l.albedo != [0.0; 3])
+    r.estimator != Estimator::Mis && r.material.compensated() && r.material.lobes.iter().any(|l| l.albedo != [0.0; 3])
 }
 
 /// Whether the G-buffer's pass may cull back faces: exact only for an eye outside the mesh's
