@@ -69,10 +69,11 @@ void main() {
         vec3 irr = k0.x * alpha + k0.y * beta[0] + k0.z * beta[1] + k0.w * beta[2]
                  + k1.x * gamma[0][0] + k1.y * gamma[1][1] + k1.z * gamma[2][2] + k1.w * gamma[0][1]
                  + k2.x * gamma[0][2] + k2.y * gamma[1][2];
-        if (pc.params.x != 0u) {
-            [[unroll]] for (int j = 0; j < 4; j++) {
-                if (dl[j].z > 0.0) irr += d.power[j].rgb * ((1.0 - brdf_table_albedo(k, dl[j])) * dl[j].z);
-            }
+        // The slots past the lights' count have no power (the same for every pixel, so the test
+        // skips their lookups everywhere).
+        [[unroll]] for (int j = 0; j < 4; j++) {
+            if (d.power[j].r + d.power[j].g + d.power[j].b > 0.0 && dl[j].z > 0.0)
+                irr += d.power[j].rgb * ((1.0 - brdf_table_albedo(k, dl[j])) * dl[j].z);
         }
         sum += brdf_lobe(k).albedo.rgb * ((uo * brdf_table_float(8u * k + 5u)) * max(irr, vec3(0.0)));
     } while (++k < count);

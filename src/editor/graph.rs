@@ -38,6 +38,12 @@ fn scale_of(log: bool) -> Scale {
 
 impl Curves {
     pub fn new(m: &Material, light: DVec3) -> Curves {
+        // The UI thread never waits for a compensation table: until every lobe's is baked (on a
+        // thread of its own, `render::compensation::Tables`) the graphs show the lobes alone, and
+        // are made again when the tables arrive (`CanvasKey::tables`).
+        let ready = !m.compensated() || m.lobes.iter().all(crate::brdf::compensation::baked);
+        let without = Material { preserve_energy: false, ..m.clone() };
+        let m = if ready { m } else { &without };
         // The incident direction in the local frame of the canvas centre (n = +z): the light's
         // elevation, in the plane φ = 0.
         let wi = plot::incident(light);

@@ -17,22 +17,6 @@ use crate::vk::pipeline::Pipeline;
 use crate::vk::{Buffer, Context};
 use crate::Result;
 
-/// The real SH basis of bands `l ≤ 2` at a unit `ω`, in the order of `glsl/include/diffuse.glsl`.
-pub fn sh9(w: [f64; 3]) -> [f64; 9] {
-    let [x, y, z] = w;
-    [
-        0.282095,
-        0.488603 * y,
-        0.488603 * z,
-        0.488603 * x,
-        1.092548 * x * y,
-        1.092548 * y * z,
-        0.315392 * (3.0 * z * z - 1.0),
-        1.092548 * x * z,
-        0.546274 * (x * x - y * y),
-    ]
-}
-
 /// Cells a side of the cosine-weighted square the kernel is projected over: the same midpoint rule as
 /// `Table::deficit`, so that the band-0 term is the table's measured deficit.
 const KERNEL_GRID: usize = 256;
@@ -46,7 +30,7 @@ pub fn kernel_sh(t: &Table) -> [f64; 9] {
             let u = ((i as f64 + 0.5) / KERNEL_GRID as f64, (j as f64 + 0.5) / KERNEL_GRID as f64);
             let w = crate::brdf::sampling::sample_cosine(u.0, u.1);
             let g = 1.0 - f64::from(t.albedo(w.as_vec3().to_array()));
-            for (c, y) in k.iter_mut().zip(sh9(w.to_array())) {
+            for (c, y) in k.iter_mut().zip(crate::scene::env::sh_basis(w)) {
                 *c += g * y;
             }
         }
