@@ -219,7 +219,8 @@ impl App {
             mesh_previewed: self.mesh_previewed,
             canvas_previewed: self.canvas_previewed,
             holding: state.dragging(),
-            refine: refining && refined < REFINE_MAX,
+            // No refinement of an image still waiting for a compensation table.
+            refine: refining && refined < REFINE_MAX && self.tables_pending.is_none(),
         });
         let (mesh, mesh_kind) = self.mesh_work(mesh_step, &full, mesh_size, refined);
         let canvas = (canvas_step != CanvasStep::Keep).then(|| {
